@@ -1,0 +1,892 @@
+"""Numba kernels of the lumped-mass tow simulator (Houbolt + Newton on segment tensions).
+
+Everything here works on flat arrays (see :mod:`towenv.core.system` for their meaning). Each public
+kernel has a plain-numpy twin in :mod:`towenv.core.twin` that the tests compare against.
+
+Where each force is computed (one search finds it):
+
+* cable drag, weight, mass and added mass of a segment ...... ``segment_loads``
+* assembly of node mass matrices and non-tension forces ....... ``node_assembly``
+* point bodies (ball / clump) ................................. ``node_assembly`` (``pb_*`` arrays)
+* rigid towed bodies: hydrodynamics, weight/buoyancy, damping ... ``body_loads``
+* condensation of a rigid body onto its tow-point node ........ ``body_condense``
+* the tension (length-constraint) system and its tree LDLᵀ .... ``assemble_tension_system``, ``tree_ldlt_solve``
+* one Houbolt step with the Newton iteration ................. ``houbolt_step``
+
+Sign conventions: ``t_s`` is the unit tangent of segment ``s`` pointing from its lower node to its upper
+node (toward the ship); a positive tension pulls the lower node by ``+T t`` and the upper node by
+``-T t``. ``F_o`` are all non-tension forces on a node (positive along the global axes). Gravity is
+``-g e_z``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# status codes returned by the step kernels
+OK = 0
+FAIL_NEWTON = 1        # iteration cap reached / residual growing
+FAIL_NAN = 2           # non-finite number appeared
+FAIL_STRETCH = 3       # non-physical strain in a segment
+FAIL_ANGLE = 4         # body pitch reached the Euler singularity
+
+FREE = 0
+PRESCRIBED_TOP = 1
+PRESCRIBED_AFT = 2
+
+
+# ----------------------------------------------------------------------------------------------
+# small 3-vector / 3x3 helpers
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _inv3(a, out):
+    """Inverse of a 3x3 matrix (closed form). Returns False if singular."""
+    c00 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
+    c01 = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
+    c02 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
+    det = a[0, 0] * c00 + a[0, 1] * c01 + a[0, 2] * c02
+    if det == 0.0 or not math.isfinite(det):
+        return False
+    idet = 1.0 / det
+    out[0, 0] = c00 * idet
+    out[0, 1] = (a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2]) * idet
+    out[0, 2] = (a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]) * idet
+    out[1, 0] = c01 * idet
+    out[1, 1] = (a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0]) * idet
+    out[1, 2] = (a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]) * idet
+    out[2, 0] = c02 * idet
+    out[2, 1] = (a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1]) * idet
+    out[2, 2] = (a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]) * idet
+    return True
+
+
+@njit(cache=True)
+def rotation_matrix(roll, pitch, yaw, out):
+    """Λ_f: global -> body components (model.md 1.4; yaw, then pitch (nose down +), then roll)."""
+    cb = math.cos(roll)
+    sb = math.sin(roll)
+    ca = math.cos(pitch)
+    sa = math.sin(pitch)
+    cg = math.cos(yaw)
+    sg = math.sin(yaw)
+    out[0, 0] = cg * ca
+    out[0, 1] = sg * ca
+    out[0, 2] = -sa
+    out[1, 0] = -sg * cb + cg * sa * sb
+    out[1, 1] = cg * cb + sg * sa * sb
+    out[1, 2] = ca * sb
+    out[2, 0] = cg * sa * cb + sg * sb
+    out[2, 1] = sg * sa * cb - cg * sb
+    out[2, 2] = ca * cb
+
+
+@njit(cache=True)
+def current_at(z, cur_z, cur_v, out):
+    """Current velocity at height z (depth = -z), linear in depth, held beyond the table ends."""
+    n = cur_z.shape[0]
+    depth = -z
+    if n == 1 or depth <= cur_z[0]:
+        for k in range(3):
+            out[k] = cur_v[0, k]
+        return
+    if depth >= cur_z[n - 1]:
+        for k in range(3):
+            out[k] = cur_v[n - 1, k]
+        return
+    i = 0
+    while cur_z[i + 1] < depth:
+        i += 1
+    f = (depth - cur_z[i]) / (cur_z[i + 1] - cur_z[i])
+    for k in range(3):
+        out[k] = cur_v[i, k] * (1.0 - f) + cur_v[i + 1, k] * f
+
+
+@njit(cache=True)
+def table_lookup(x, xs, ys, n):
+    """Piecewise-linear table lookup, end values held outside the table (never extrapolated)."""
+    if x <= xs[0]:
+        return ys[0]
+    if x >= xs[n - 1]:
+        return ys[n - 1]
+    i = 0
+    while xs[i + 1] < x:
+        i += 1
+    f = (x - xs[i]) / (xs[i + 1] - xs[i])
+    return ys[i] * (1.0 - f) + ys[i + 1] * f
+
+
+# ----------------------------------------------------------------------------------------------
+# cable segment loads
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
+                  tang, stretched, drag, bmat, madd):
+    """Per-segment tangent, stretched length, Morison drag, drag damping matrix and added mass.
+
+    ``drag[s]``: total quadratic drag on the segment (opposes the relative velocity, vector normal form,
+    model.md 2.3), to be split half/half onto its end nodes. ``bmat[s]``: −∂drag/∂v (SPD), used for the
+    implicit drag of the node mass. ``madd[s]``: added-mass tensor of the whole segment.
+    Wet weight and dry mass are linear in ``l0`` and are added in ``node_assembly``.
+    """
+    nseg = seg_lo.shape[0]
+    vc = np.empty(3)
+    vr = np.empty(3)
+    for s in range(nseg):
+        a = seg_lo[s]
+        b = seg_up[s]
+        dx = r[b, 0] - r[a, 0]
+        dy = r[b, 1] - r[a, 1]
+        dz = r[b, 2] - r[a, 2]
+        ell = math.sqrt(dx * dx + dy * dy + dz * dz)
+        stretched[s] = ell
+        if ell > 0.0:
+            tang[s, 0] = dx / ell
+            tang[s, 1] = dy / ell
+            tang[s, 2] = dz / ell
+        else:
+            tang[s, 0] = 0.0
+            tang[s, 1] = 0.0
+            tang[s, 2] = 1.0
+        # relative velocity: mean of the two end nodes' (velocity - current)  (thesis 3.9-3.10)
+        current_at(r[a, 2], cur_z, cur_v, vc)
+        for k in range(3):
+            vr[k] = 0.5 * (v[a, k] - vc[k])
+        current_at(r[b, 2], cur_z, cur_v, vc)
+        for k in range(3):
+            vr[k] += 0.5 * (v[b, k] - vc[k])
+        t0 = tang[s, 0]
+        t1 = tang[s, 1]
+        t2 = tang[s, 2]
+        vt_mag = vr[0] * t0 + vr[1] * t1 + vr[2] * t2
+        vn0 = vr[0] - vt_mag * t0
+        vn1 = vr[1] - vt_mag * t1
+        vn2 = vr[2] - vt_mag * t2
+        vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
+        kn = 0.5 * rho * cn[s] * diam[s] * l0[s]
+        kt = 0.5 * rho * ct[s] * diam[s] * l0[s]
+        avt = abs(vt_mag)
+        drag[s, 0] = -kn * vn_abs * vn0 - kt * avt * vt_mag * t0
+        drag[s, 1] = -kn * vn_abs * vn1 - kt * avt * vt_mag * t1
+        drag[s, 2] = -kn * vn_abs * vn2 - kt * avt * vt_mag * t2
+        # damping matrix B = kn(|vn|(1 - t t^T) + vn vn^T/|vn|) + 2 kt |vt| t t^T
+        for i in range(3):
+            for j in range(3):
+                tt = tang[s, i] * tang[s, j]
+                proj = (1.0 if i == j else 0.0) - tt
+                bij = kn * vn_abs * proj + 2.0 * kt * avt * tt
+                bmat[s, i, j] = bij
+        if vn_abs > 1e-12:
+            vn = (vn0, vn1, vn2)
+            for i in range(3):
+                for j in range(3):
+                    bmat[s, i, j] += kn * vn[i] * vn[j] / vn_abs
+        area = 0.25 * math.pi * diam[s] * diam[s]
+        amt = cat[s] * rho * area * l0[s]
+        amn = can[s] * rho * area * l0[s]
+        for i in range(3):
+            for j in range(3):
+                tt = tang[s, i] * tang[s, j]
+                madd[s, i, j] = amt * tt + amn * ((1.0 if i == j else 0.0) - tt)
+
+
+@njit(cache=True)
+def node_assembly(r, v, node_kind, node_nseg, node_segs, l0, diam, mu, rho, g, drag, bmat, madd,
+                  pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode):
+    """Node mass matrices (dry + added mass), drag damping matrices and non-tension forces.
+
+    Each segment gives half of its mass, added mass, wet weight and drag to each end node (thesis §3.3).
+    Point bodies (ball/clump) add their mass + added mass (isotropic), wet weight and isotropic
+    quadratic drag ``-½ρ CdA |v_r| v_r``.
+    """
+    nn = node_kind.shape[0]
+    vc = np.empty(3)
+    for a in range(nn):
+        for i in range(3):
+            fnode[a, i] = 0.0
+            for j in range(3):
+                mnode[a, i, j] = 0.0
+                bnode[a, i, j] = 0.0
+        for k in range(node_nseg[a]):
+            s = node_segs[a, k]
+            m_half = 0.5 * mu[s] * l0[s]
+            wet = 0.5 * (mu[s] - rho * 0.25 * math.pi * diam[s] * diam[s]) * g * l0[s]
+            for i in range(3):
+                mnode[a, i, i] += m_half
+                fnode[a, i] += 0.5 * drag[s, i]
+                for j in range(3):
+                    mnode[a, i, j] += 0.5 * madd[s, i, j]
+                    bnode[a, i, j] += 0.5 * bmat[s, i, j]
+            fnode[a, 2] -= wet
+        # point body
+        if pb_mass[a] > 0.0:
+            mtot = pb_mass[a] + pb_ca[a] * rho * pb_vol[a]
+            for i in range(3):
+                mnode[a, i, i] += mtot
+            fnode[a, 2] -= (pb_mass[a] - rho * pb_vol[a]) * g
+            if pb_cda[a] > 0.0:
+                current_at(r[a, 2], cur_z, cur_v, vc)
+                v0 = v[a, 0] - vc[0]
+                v1 = v[a, 1] - vc[1]
+                v2 = v[a, 2] - vc[2]
+                vm = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+                kd = 0.5 * rho * pb_cda[a]
+                fnode[a, 0] -= kd * vm * v0
+                fnode[a, 1] -= kd * vm * v1
+                fnode[a, 2] -= kd * vm * v2
+                vv = (v0, v1, v2)
+                for i in range(3):
+                    bnode[a, i, i] += kd * vm
+                    if vm > 1e-12:
+                        for j in range(3):
+                            bnode[a, i, j] += kd * vv[i] * vv[j] / vm
+
+
+# ----------------------------------------------------------------------------------------------
+# rigid towed bodies (fish, depressor)
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out, m_out, bdiag_out):
+    """Hydrodynamic, weight/buoyancy and rotational damping loads on rigid body ``b``.
+
+    Body-axis force ``f_out`` acting at the tow point and moment ``m_out`` about the tow point.
+    ``bp[b]`` packs the body parameters (see ``system.BODY_PARAM``); ``btab[b]`` the coefficient tables
+    (rows: incidence_deg, drag, lift, moment for the vertical plane, then the horizontal plane).
+    ``bdiag_out`` returns an isotropic estimate of the translational drag derivative (for the implicit
+    drag of the node mass; it affects only the convergence rate, never the converged answer).
+    """
+    mass = bp[b, 0]
+    vol = bp[b, 1]
+    area = bp[b, 2]
+    length = bp[b, 3]
+    xb = bp[b, 7]
+    yb = bp[b, 8]
+    zb = bp[b, 9]
+    xg = bp[b, 4]
+    yg = bp[b, 5]
+    zg = bp[b, 6]
+    # weight and buoyancy (body axes)
+    gb0 = -lam[0, 2] * g
+    gb1 = -lam[1, 2] * g
+    gb2 = -lam[2, 2] * g
+    wnet = mass - rho * vol
+    f_out[0] = wnet * gb0
+    f_out[1] = wnet * gb1
+    f_out[2] = wnet * gb2
+    # moments r_G x m g_b  -  r_B x rho V g_b
+    m_out[0] = mass * (yg * gb2 - zg * gb1) - rho * vol * (yb * gb2 - zb * gb1)
+    m_out[1] = mass * (zg * gb0 - xg * gb2) - rho * vol * (zb * gb0 - xb * gb2)
+    m_out[2] = mass * (xg * gb1 - yg * gb0) - rho * vol * (xb * gb1 - yb * gb0)
+    # relative velocity of the centroid in body axes
+    vc0 = lam[0, 0] * cur_global[0] + lam[0, 1] * cur_global[1] + lam[0, 2] * cur_global[2]
+    vc1 = lam[1, 0] * cur_global[0] + lam[1, 1] * cur_global[1] + lam[1, 2] * cur_global[2]
+    vc2 = lam[2, 0] * cur_global[0] + lam[2, 1] * cur_global[1] + lam[2, 2] * cur_global[2]
+    ur = vbody[0] + (omega[1] * zb - omega[2] * yb) - vc0
+    vr = vbody[1] + (omega[2] * xb - omega[0] * zb) - vc1
+    wr = vbody[2] + (omega[0] * yb - omega[1] * xb) - vc2
+    vmag = math.sqrt(ur * ur + vr * vr + wr * wr)
+    qa = 0.5 * rho * area
+    nv = btab_n[b, 0]
+    nh = btab_n[b, 1]
+    bdiag_out[0] = 0.0
+    if vmag > 1e-9:
+        th_v = math.degrees(math.atan2(-wr, ur))   # + when the flow meets the underside
+        th_h = math.degrees(math.atan2(-vr, ur))   # + when the flow meets the starboard side
+        cd_v = table_lookup(th_v, btab[b, 0], btab[b, 1], nv)
+        cl_v = table_lookup(th_v, btab[b, 0], btab[b, 2], nv)
+        cm_v = table_lookup(th_v, btab[b, 0], btab[b, 3], nv)
+        cd_h = table_lookup(th_h, btab[b, 4], btab[b, 5], nh)
+        cy_h = table_lookup(th_h, btab[b, 4], btab[b, 6], nh)
+        cm_h = table_lookup(th_h, btab[b, 4], btab[b, 7], nh)
+        cd0 = table_lookup(0.0, btab[b, 0], btab[b, 1], nv)
+        cd = cd_v + cd_h - cd0
+        if cd < 0.0:
+            cd = 0.0
+        q = qa * vmag * vmag
+        # drag along -v_r
+        f_out[0] -= q * cd * ur / vmag
+        f_out[1] -= q * cd * vr / vmag
+        f_out[2] -= q * cd * wr / vmag
+        # lift in the x'z' plane, perpendicular to v_r, positive toward +z'
+        tv = math.radians(th_v)
+        f_out[0] += q * cl_v * math.sin(tv)
+        f_out[2] += q * cl_v * math.cos(tv)
+        # side force in the x'y' plane, positive toward +y'
+        th = math.radians(th_h)
+        f_out[0] += q * cy_h * math.sin(th)
+        f_out[1] += q * cy_h * math.cos(th)
+        # weathervane moments about the tow point
+        m_out[1] += q * length * cm_v
+        m_out[2] -= q * length * cm_h
+        # isotropic drag-derivative estimate for the implicit drag
+        bdiag_out[0] = qa * vmag * (2.0 * cd + bp[b, 19])
+    # rotational damping: linear rotary derivatives + Hover (17) quadratic term
+    for k in range(3):
+        lin = bp[b, 13 + k]
+        quad = bp[b, 16 + k]
+        w = omega[k]
+        m_out[k] -= qa * length * length * vmag * lin * w + qa * quad * length ** 3 / 32.0 * w * abs(w)
+
+
+@njit(cache=True)
+def body_mass_blocks(b, bp, att, atr, arr):
+    """Rigid-body + added mass blocks about the tow point: A = [[A_tt, A_tr], [A_rt, A_rr]], A_rt = A_trᵀ."""
+    mass = bp[b, 0]
+    xg = bp[b, 4]
+    yg = bp[b, 5]
+    zg = bp[b, 6]
+    rg = (xg, yg, zg)
+    for i in range(3):
+        for j in range(3):
+            att[i, j] = 0.0
+            arr[i, j] = 0.0
+        att[i, i] = mass + bp[b, 20 + i]
+    r2 = xg * xg + yg * yg + zg * zg
+    for i in range(3):
+        for j in range(3):
+            arr[i, j] = -mass * rg[i] * rg[j]
+        arr[i, i] += mass * r2 + bp[b, 10 + i] + bp[b, 23 + i]
+    # A_tr = -m S(r_G)   (S(a) b = a x b)
+    atr[0, 0] = 0.0
+    atr[0, 1] = mass * zg
+    atr[0, 2] = -mass * yg
+    atr[1, 0] = -mass * zg
+    atr[1, 1] = 0.0
+    atr[1, 2] = mass * xg
+    atr[2, 0] = mass * yg
+    atr[2, 1] = -mass * xg
+    atr[2, 2] = 0.0
+
+
+@njit(cache=True)
+def euler_rates_to_omega(ang, dang, out):
+    """Body rates (p, q, r) from Euler angles (roll, pitch, yaw) and their time derivatives."""
+    cb = math.cos(ang[0])
+    sb = math.sin(ang[0])
+    ca = math.cos(ang[1])
+    sa = math.sin(ang[1])
+    out[0] = dang[0] - dang[2] * sa
+    out[1] = dang[1] * cb + dang[2] * ca * sb
+    out[2] = -dang[1] * sb + dang[2] * ca * cb
+
+
+@njit(cache=True)
+def omega_dot_to_euler_acc(ang, dang, omega, domega, out):
+    """Euler-angle accelerations from body angular acceleration (exact z-y-x kinematics, model.md 1.4)."""
+    cb = math.cos(ang[0])
+    sb = math.sin(ang[0])
+    ca = math.cos(ang[1])
+    sa = math.sin(ang[1])
+    ta = sa / ca
+    p = omega[0]
+    q = omega[1]
+    r = omega[2]
+    qsrc = q * sb + r * cb
+    qcrs = q * cb - r * sb
+    # H(θ) dω
+    h0 = domega[0] + (domega[1] * sb + domega[2] * cb) * ta
+    h1 = domega[1] * cb - domega[2] * sb
+    h2 = (domega[1] * sb + domega[2] * cb) / ca
+    # (dH/dt) ω
+    db = dang[0]
+    da = dang[1]
+    out[0] = h0 + qcrs * ta * db + qsrc / (ca * ca) * da
+    out[1] = h1 - qsrc * db
+    out[2] = h2 + qcrs / ca * db + qsrc * sa / (ca * ca) * da
+    _ = p
+
+
+# ----------------------------------------------------------------------------------------------
+# tension system
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qvec, l0, ea, tens,
+                            kd, kb):
+    """K = −J of the length constraints g_s = ℓ_s − l_s(1 + T_s/EA_s), row-scaled (model.md 5.3–5.6).
+
+    ``qvec[a, k] = ½Δt² M̃_a⁻¹ t_{s_k}`` is ∂r_a/∂T_{s_k} up to the sign σ. Off-diagonal entries live in
+    the node blocks ``kb[a]`` (two segments share at most one node in a tree), diagonals in ``kd``.
+    Rows use the same (frozen) tangents as the coefficients, so K is exactly symmetric positive definite.
+    """
+    nseg = l0.shape[0]
+    for s in range(nseg):
+        if math.isinf(ea[s]):
+            kd[s] = 0.0
+        else:
+            kd[s] = l0[s] / ea[s]
+    nn = node_kind.shape[0]
+    for a in range(nn):
+        ns = node_nseg[a]
+        for k1 in range(ns):
+            for k2 in range(ns):
+                kb[a, k1, k2] = 0.0
+        if node_kind[a] != FREE:
+            continue
+        for k1 in range(ns):
+            s1 = node_segs[a, k1]
+            for k2 in range(ns):
+                val = node_sgn[a, k1] * node_sgn[a, k2] * (
+                    tang[s1, 0] * qvec[a, k2, 0] + tang[s1, 1] * qvec[a, k2, 1] + tang[s1, 2] * qvec[a, k2, 2])
+                if k1 == k2:
+                    kd[s1] += val
+                else:
+                    kb[a, k1, k2] = val
+    _ = tens
+
+
+@njit(cache=True)
+def tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb, rhs, x):
+    """Solve K x = rhs for the tree-structured SPD tension matrix by LDLᵀ without fill-in.
+
+    ``order`` eliminates segments from the free ends toward the ship (each after every segment below
+    it). A segment's later neighbours all sit at its upper node, whose segments form a clique, so the
+    elimination creates no fill (model.md 5.6). O(n); ``kd``, ``kb`` and ``rhs`` are overwritten.
+    Returns False if a pivot is not positive (the matrix is not SPD).
+    """
+    n = order.shape[0]
+    for ip in range(n):
+        p = order[ip]
+        d = kd[p]
+        if not (d > 0.0):
+            return False
+        a = seg_up[p]
+        if node_kind[a] != FREE:
+            continue
+        kp = seg_uplocal[p]
+        ns = node_nseg[a]
+        for k1 in range(ns):
+            q1 = node_segs[a, k1]
+            if pos[q1] <= ip:
+                continue
+            l1 = kb[a, k1, kp]
+            if l1 == 0.0:
+                continue
+            f = l1 / d
+            rhs[q1] -= f * rhs[p]
+            kd[q1] -= f * l1
+            for k2 in range(ns):
+                q2 = node_segs[a, k2]
+                if k2 == k1 or pos[q2] <= ip:
+                    continue
+                kb[a, k1, k2] -= f * kb[a, kp, k2]
+    for ip in range(n - 1, -1, -1):
+        p = order[ip]
+        acc = rhs[p]
+        a = seg_up[p]
+        if node_kind[a] == FREE:
+            kp = seg_uplocal[p]
+            for k in range(node_nseg[a]):
+                q = node_segs[a, k]
+                if pos[q] > ip:
+                    acc -= kb[a, kp, k] * x[q]
+        x[p] = acc / kd[p]
+    return True
+
+
+# ----------------------------------------------------------------------------------------------
+# one Houbolt step
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _cross(a0, a1, a2, b0, b1, b2, out):
+    out[0] = a1 * b2 - a2 * b1
+    out[1] = a2 * b0 - a0 * b2
+    out[2] = a0 * b1 - a1 * b0
+
+
+@njit(cache=True)
+def place_aft_nodes(r, ang, body_node, body_aft_node, bp, lam):
+    """Aft tow points are rigidly carried by their body: r_aft = r_tp + Λ_fᵀ r_t."""
+    for b in range(body_node.shape[0]):
+        c = body_aft_node[b]
+        if c < 0:
+            continue
+        rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
+        a = body_node[b]
+        for i in range(3):
+            r[c, i] = r[a, i] + lam[0, i] * bp[b, 26] + lam[1, i] * bp[b, 27] + lam[2, i] * bp[b, 28]
+
+
+@njit(cache=True)
+def node_reaction(c, r, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens, mnode, fnode, out):
+    """Force that the cable system exerts on the support of a prescribed node c (global axes).
+
+    = Σ σ T t + F_o − M r̈ (its own half-segment weight, drag and inertia included, model.md 2.6)."""
+    idt2 = 1.0 / (dt * dt)
+    for i in range(3):
+        out[i] = fnode[c, i]
+    for k in range(node_nseg[c]):
+        s = node_segs[c, k]
+        sg = node_sgn[c, k]
+        for i in range(3):
+            out[i] += sg * tens[s] * tang[s, i]
+    for i in range(3):
+        acc_i = 0.0
+        for j in range(3):
+            accj = (2.0 * r[c, j] - 5.0 * r_t[c, j] + 4.0 * r_tm1[c, j] - r_tm2[c, j]) * idt2
+            acc_i += mnode[c, i, j] * accj
+        out[i] -= acc_i
+
+
+@njit(cache=True)
+def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws):
+    """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
+
+    On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
+    solution lives in the work arrays), so the caller can retry with a smaller step.
+    """
+    (seg_lo, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, node_sgn, order, pos,
+     body_node, body_aft_node) = topo
+    l0, diam, mu, cn, ct, can, cat, ea = segp
+    bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca = bodyp
+    rho, g, cur_z, cur_v = env
+    tol_abs = settings[0]
+    tol_rel = settings[1]
+    maxit = int(settings[2])
+    max_strain = settings[3]
+    ang_tol = settings[4]
+    hist_r, hist_ang, tens_hist, top_react = state
+    (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
+     gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
+     fb, mb, bdiag, react) = ws
+
+    nn = node_kind.shape[0]
+    ns = l0.shape[0]
+    nb = body_node.shape[0]
+    r_t = hist_r[0]
+    r_tm1 = hist_r[1]
+    r_tm2 = hist_r[2]
+    c11 = 11.0 * dt / 12.0
+    hdt2 = 0.5 * dt * dt
+    i6dt = 1.0 / (6.0 * dt)
+    idt2 = 1.0 / (dt * dt)
+
+    # predictor
+    for a in range(nn):
+        for i in range(3):
+            rs[a, i] = 3.0 * r_t[a, i] - 3.0 * r_tm1[a, i] + r_tm2[a, i]
+    for i in range(3):
+        rs[top_node, i] = r_top_new[i]
+    for b in range(nb):
+        for i in range(3):
+            angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
+    place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
+    for s in range(ns):
+        tens[s] = tens_hist[0, s]
+
+    status = FAIL_NEWTON
+    elem = -1
+    it = 0
+    maxd = 0.0
+    for it in range(1, maxit + 1):
+        # --- coefficients at the current iterate -------------------------------------------------
+        for a in range(nn):
+            for i in range(3):
+                vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt
+        segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
+                      tang, stretched, drag, bmat, madd)
+        node_assembly(rs, vs, node_kind, node_nseg, node_segs, l0, diam, mu, rho, g, drag, bmat, madd,
+                      pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode)
+        for b in range(nb):
+            a = body_node[b]
+            for i in range(3):
+                dang[b, i] = (11.0 * angs[b, i] - 18.0 * hist_ang[0, b, i] + 9.0 * hist_ang[1, b, i]
+                              - 2.0 * hist_ang[2, b, i]) * i6dt
+            lam = blam[b]
+            rotation_matrix(angs[b, 0], angs[b, 1], angs[b, 2], lam)
+            euler_rates_to_omega(angs[b], dang[b], omg[b])
+            w = omg[b]
+            for i in range(3):
+                tmp3[i] = lam[i, 0] * vs[a, 0] + lam[i, 1] * vs[a, 1] + lam[i, 2] * vs[a, 2]
+            zc = rs[a, 2] + lam[0, 2] * bp[b, 7] + lam[1, 2] * bp[b, 8] + lam[2, 2] * bp[b, 9]
+            current_at(zc, cur_z, cur_v, cur_b)
+            body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
+            c = body_aft_node[b]
+            if c >= 0:
+                node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
+                              mnode, fnode, react)
+                f0 = lam[0, 0] * react[0] + lam[0, 1] * react[1] + lam[0, 2] * react[2]
+                f1 = lam[1, 0] * react[0] + lam[1, 1] * react[1] + lam[1, 2] * react[2]
+                f2 = lam[2, 0] * react[0] + lam[2, 1] * react[1] + lam[2, 2] * react[2]
+                fb[0] += f0
+                fb[1] += f1
+                fb[2] += f2
+                _cross(bp[b, 26], bp[b, 27], bp[b, 28], f0, f1, f2, tmp3)
+                for i in range(3):
+                    mb[i] += tmp3[i]
+            # Coriolis / centripetal terms to the right-hand side
+            mass = bp[b, 0]
+            _cross(w[0], w[1], w[2], bp[b, 4], bp[b, 5], bp[b, 6], tmp3)
+            wx0 = tmp3[0]
+            wx1 = tmp3[1]
+            wx2 = tmp3[2]
+            _cross(w[0], w[1], w[2], wx0, wx1, wx2, tmp3)
+            for i in range(3):
+                fb[i] -= mass * tmp3[i]
+            body_mass_blocks(b, bp, att, atr, arr)
+            # I_o ω (rigid part only: arr minus added inertia)
+            for i in range(3):
+                hvec[i] = 0.0
+                for j in range(3):
+                    hvec[i] += arr[i, j] * w[j]
+                hvec[i] -= bp[b, 23 + i] * w[i]
+            _cross(w[0], w[1], w[2], hvec[0], hvec[1], hvec[2], tmp3)
+            for i in range(3):
+                mb[i] -= tmp3[i]
+            if not _inv3(arr, arrinv):
+                return FAIL_NAN, it, -1, 0.0
+            # X = A_rr⁻¹ A_rt (A_rt = A_trᵀ), y = A_rr⁻¹ M
+            X = bX[b]
+            for i in range(3):
+                by[b, i] = arrinv[i, 0] * mb[0] + arrinv[i, 1] * mb[1] + arrinv[i, 2] * mb[2]
+                for j in range(3):
+                    X[i, j] = arrinv[i, 0] * atr[j, 0] + arrinv[i, 1] * atr[j, 1] + arrinv[i, 2] * atr[j, 2]
+            # A_eff = A_tt − A_tr X ;  f_eff = F − A_tr y
+            for i in range(3):
+                fi = fb[i]
+                for k in range(3):
+                    fi -= atr[i, k] * by[b, k]
+                tmp3[i] = fi
+                for j in range(3):
+                    e = att[i, j]
+                    for k in range(3):
+                        e -= atr[i, k] * X[k, j]
+                    tmp33b[i, j] = e
+            # global: M += Λᵀ A_eff Λ ; F += Λᵀ f_eff
+            for i in range(3):
+                for j in range(3):
+                    sacc = 0.0
+                    for k in range(3):
+                        for m in range(3):
+                            sacc += lam[k, i] * tmp33b[k, m] * lam[m, j]
+                    mnode[a, i, j] += sacc
+                fnode[a, i] += lam[0, i] * tmp3[0] + lam[1, i] * tmp3[1] + lam[2, i] * tmp3[2]
+                bnode[a, i, i] += bdiag[0]
+        # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
+        for a in range(nn):
+            if node_kind[a] != FREE:
+                continue
+            for i in range(3):
+                for j in range(3):
+                    tmp33[i, j] = mnode[a, i, j] + c11 * bnode[a, i, j]
+            if not _inv3(tmp33, tmp33b):
+                return FAIL_NAN, it, a, 0.0
+            for i in range(3):
+                hi = 0.0
+                for j in range(3):
+                    hj = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
+                    hi += mnode[a, i, j] * hj + c11 * bnode[a, i, j] * rs[a, j]
+                tmp3[i] = hi + hdt2 * fnode[a, i]
+            for i in range(3):
+                acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
+            for k in range(node_nseg[a]):
+                s = node_segs[a, k]
+                for i in range(3):
+                    qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
+                                            + tmp33b[i, 2] * tang[s, 2])
+        # positions at the current tensions, and residuals
+        for a in range(nn):
+            if node_kind[a] != FREE:
+                continue
+            for i in range(3):
+                x = acon[a, i]
+                for k in range(node_nseg[a]):
+                    x += node_sgn[a, k] * tens[node_segs[a, k]] * qvec[a, k, i]
+                rs[a, i] = x
+        place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
+        tmax = 0.0
+        for s in range(ns):
+            p = seg_lo[s]
+            q = seg_up[s]
+            dx = rs[q, 0] - rs[p, 0]
+            dy = rs[q, 1] - rs[p, 1]
+            dz = rs[q, 2] - rs[p, 2]
+            ell = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if math.isinf(ea[s]):
+                gres[s] = ell - l0[s]
+            else:
+                gres[s] = ell - l0[s] * (1.0 + tens[s] / ea[s])
+            if tens[s] > tmax:
+                tmax = tens[s]
+        # --- Newton update of the tensions ----------------------------------------------------
+        assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qvec, l0, ea, tens, kd, kb)
+        for s in range(ns):
+            rhs[s] = gres[s]
+            if tens[s] <= 0.0 and gres[s] < 0.0:
+                # slack segment: hold T = 0 (row and column replaced by identity)
+                kd[s] = 1.0
+                rhs[s] = -tens[s]
+                for e in range(2):
+                    a = seg_lo[s] if e == 0 else seg_up[s]
+                    for k in range(node_nseg[a]):
+                        if node_segs[a, k] == s:
+                            for k2 in range(node_nseg[a]):
+                                kb[a, k, k2] = 0.0
+                                kb[a, k2, k] = 0.0
+        if not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb,
+                               rhs, dT):
+            return FAIL_NEWTON, it, -1, 0.0
+        maxd = 0.0
+        elem = -1
+        for s in range(ns):
+            tn = tens[s] + dT[s]
+            if tn < 0.0:
+                tn = 0.0
+            d = abs(tn - tens[s])
+            if not (d <= maxd):     # also catches NaN
+                maxd = d
+                elem = s
+            tens[s] = tn
+        if not math.isfinite(maxd):
+            return FAIL_NAN, it, elem, maxd
+        # positions with the updated tensions (same coefficients)
+        for a in range(nn):
+            if node_kind[a] != FREE:
+                continue
+            for i in range(3):
+                x = acon[a, i]
+                for k in range(node_nseg[a]):
+                    x += node_sgn[a, k] * tens[node_segs[a, k]] * qvec[a, k, i]
+                rs[a, i] = x
+        # --- body rotations: ω̇ = A_rr⁻¹(M − A_rt a), Houbolt on the Euler angles -------------------
+        dang_max = 0.0
+        for b in range(nb):
+            a = body_node[b]
+            lam = blam[b]
+            for i in range(3):
+                tmp3[i] = (2.0 * rs[a, i] - 5.0 * r_t[a, i] + 4.0 * r_tm1[a, i] - r_tm2[a, i]) * idt2
+            for i in range(3):
+                hvec[i] = lam[i, 0] * tmp3[0] + lam[i, 1] * tmp3[1] + lam[i, 2] * tmp3[2]
+            for i in range(3):
+                tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
+            omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
+            for i in range(3):
+                na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
+                dd = abs(na - angs[b, i])
+                if not (dd <= dang_max):
+                    dang_max = dd
+                angs[b, i] = na
+            if abs(angs[b, 1]) > 1.48:     # ~85 deg: Euler singularity ahead
+                return FAIL_ANGLE, it, b, maxd
+        if not math.isfinite(dang_max):
+            return FAIL_NAN, it, -1, maxd
+        place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
+        if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
+            status = OK
+            break
+    if status != OK:
+        return status, it, elem, maxd
+    # --- checks and commit ------------------------------------------------------------------------
+    for s in range(ns):
+        if not math.isinf(ea[s]) and tens[s] / ea[s] > max_strain:
+            return FAIL_STRETCH, it, s, maxd
+    for a in range(nn):
+        for i in range(3):
+            if not math.isfinite(rs[a, i]):
+                return FAIL_NAN, it, a, maxd
+    # reaction on the vessel at the converged state (coefficients of the last iterate)
+    node_reaction(top_node, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
+                  mnode, fnode, react)
+    for i in range(3):
+        top_react[i] = react[i]
+    for a in range(nn):
+        for i in range(3):
+            hist_r[2, a, i] = hist_r[1, a, i]
+            hist_r[1, a, i] = hist_r[0, a, i]
+            hist_r[0, a, i] = rs[a, i]
+    for b in range(nb):
+        for i in range(3):
+            hist_ang[2, b, i] = hist_ang[1, b, i]
+            hist_ang[1, b, i] = hist_ang[0, b, i]
+            hist_ang[0, b, i] = angs[b, i]
+    for s in range(ns):
+        tens_hist[1, s] = tens_hist[0, s]
+        tens_hist[0, s] = tens[s]
+    return OK, it, -1, maxd
+
+
+@njit(cache=True)
+def _quad_interp(y1, y0, ym1, tau):
+    """Quadratic through (τ=1, y1), (0, y0), (−1, ym1) evaluated at τ (history re-spacing)."""
+    return ym1 * tau * (tau - 1.0) * 0.5 + y0 * (1.0 - tau * tau) + y1 * tau * (tau + 1.0) * 0.5
+
+
+@njit(cache=True)
+def _quad3(y0, ym1, ym2, tau):
+    """Quadratic through (0, y0), (−1, ym1), (−2, ym2) evaluated at τ ≤ 0 (in units of the old step)."""
+    return y0 * (tau + 1.0) * (tau + 2.0) * 0.5 - ym1 * tau * (tau + 2.0) + ym2 * tau * (tau + 1.0) * 0.5
+
+
+@njit(cache=True)
+def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, state, ws, saved, counters):
+    """Advance ``n_steps`` steps of size ``dt``; ``top_path[k]`` is the vessel tow point at the end of step k.
+
+    A step whose Newton iteration fails is retried as 2, 4, … 2^max_cuts sub-steps with the Houbolt
+    history re-interpolated quadratically at the new spacing (model.md 5.7). ``counters`` accumulates
+    [steps, iterations, max iterations, step cuts]. Returns (status, failed step index, element, max|δT|).
+    """
+    hist_r, hist_ang, tens_hist, top_react = state
+    s_hist_r, s_hist_ang, s_tens = saved
+    max_cuts = int(settings[5])
+    nn = hist_r.shape[1]
+    nb = hist_ang.shape[1]
+    ns = tens_hist.shape[1]
+    top_sub = np.empty(3)
+    for k in range(n_steps):
+        st, it, el, md = houbolt_step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws)
+        counters[0] += 1
+        counters[1] += it
+        if it > counters[2]:
+            counters[2] = it
+        if st == OK:
+            continue
+        s_hist_r[:] = hist_r
+        s_hist_ang[:] = hist_ang
+        s_tens[:] = tens_hist
+        ok = False
+        for cut in range(1, max_cuts + 1):
+            nsub = 2 ** cut
+            h = dt / nsub
+            counters[3] += 1
+            for l in range(3):
+                tau = -l / nsub
+                for a in range(nn):
+                    for i in range(3):
+                        hist_r[l, a, i] = _quad3(s_hist_r[0, a, i], s_hist_r[1, a, i], s_hist_r[2, a, i], tau)
+                for b in range(nb):
+                    for i in range(3):
+                        hist_ang[l, b, i] = _quad3(s_hist_ang[0, b, i], s_hist_ang[1, b, i], s_hist_ang[2, b, i], tau)
+            for s in range(ns):
+                tens_hist[0, s] = s_tens[0, s]
+                tens_hist[1, s] = s_tens[0, s]
+            good = True
+            for j in range(1, nsub + 1):
+                tau = j / nsub
+                for i in range(3):
+                    top_sub[i] = _quad_interp(top_path[k, i], s_hist_r[0, top_node, i], s_hist_r[1, top_node, i], tau)
+                st, it, el, md = houbolt_step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws)
+                counters[1] += it
+                if st != OK:
+                    good = False
+                    break
+            if good:
+                # restore the history spacing dt exactly: [r^{t+dt}, r^t, r^{t-dt}]
+                for a in range(nn):
+                    for i in range(3):
+                        hist_r[1, a, i] = s_hist_r[0, a, i]
+                        hist_r[2, a, i] = s_hist_r[1, a, i]
+                for b in range(nb):
+                    for i in range(3):
+                        hist_ang[1, b, i] = s_hist_ang[0, b, i]
+                        hist_ang[2, b, i] = s_hist_ang[1, b, i]
+                for s in range(ns):
+                    tens_hist[1, s] = s_tens[0, s]
+                ok = True
+                break
+        if not ok:
+            hist_r[:] = s_hist_r
+            hist_ang[:] = s_hist_ang
+            tens_hist[:] = s_tens
+            return st, k, el, md
+    return OK, -1, -1, 0.0
+

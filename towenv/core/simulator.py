@@ -1,0 +1,272 @@
+"""The stepping interface of the simulator core: ``Simulator`` (reset / advance / snapshot / restore)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SimulationDivergence
+from . import kernels as K
+from .excitation import TowPointPath
+from .statics import quasi_static
+from .system import MAX_SEGS_PER_NODE, System, build_system
+
+_CAUSES = {
+    K.FAIL_NEWTON: "Newton iteration on the segment tensions did not converge (after step cuts)",
+    K.FAIL_NAN: "a non-finite number appeared",
+    K.FAIL_STRETCH: "non-physical stretch: strain above solver.max_strain",
+    K.FAIL_ANGLE: "body pitch reached ±85° (Euler-angle singularity)",
+}
+
+
+def _get(obj, name, default=None):
+    if obj is None:
+        return default
+    if isinstance(obj, dict):
+        return obj.get(name, default)
+    return getattr(obj, name, default)
+
+
+@dataclass
+class Snapshot:
+    """A copy of the full dynamic state. Restoring one is a few array copies (microseconds)."""
+    hist_r: np.ndarray
+    hist_ang: np.ndarray
+    tens_hist: np.ndarray
+    top_react: np.ndarray
+    step: int
+
+
+@dataclass
+class SolverSettings:
+    dt: float = 0.02
+    tolerance: float = 0.1
+    relative_tolerance: float = 1e-6
+    max_iterations: int = 25
+    max_step_cuts: int = 4
+    max_strain: float = 0.2
+    settle_time: float = 0.0
+    angle_tolerance: float = 1e-7
+
+    def array(self):
+        return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
+                         self.angle_tolerance, self.max_step_cuts], float)
+
+
+def load(scene, overrides=None):
+    """Resolve a scene given as a path, a dict, an embedded scene name or a Scene."""
+    from ..scene import load_scene
+    sc = load_scene(scene)
+    if overrides:
+        sc = sc.with_overrides(**overrides)
+    return sc
+
+
+class Simulator:
+    """Lumped-mass tow simulator for one scene.
+
+    >>> sim = Simulator("two_part_tow_1")
+    >>> sim.advance(10.0)          # seconds
+    >>> sim.body_state("fish")["position"]
+    """
+
+    def __init__(self, scene, **overrides):
+        short = {k: v for k, v in overrides.items() if k in SolverSettings.__dataclass_fields__}
+        dotted = {k: v for k, v in overrides.items() if k not in short}
+        dotted.update({f"solver.{k}": v for k, v in short.items()})
+        self.scene = load(scene, dotted)
+        self.system: System = build_system(self.scene)
+        solver = _get(self.scene, "solver")
+        self.settings = SolverSettings(**{k: _get(solver, k, getattr(SolverSettings, k))
+                                          for k in SolverSettings.__dataclass_fields__
+                                          if _get(solver, k) is not None})
+        base = getattr(self.scene, "source_dir", None)
+        data_dir = Path(__file__).resolve().parent.parent / "scenes" / "data"
+        self.path = TowPointPath(_get(self.scene, "vessel"), Path(base) if base else None, data_dir)
+        self._allocate()
+        self._initial_state()
+        self._initial = self.snapshot()
+
+    # ------------------------------------------------------------------------------------------
+    def _allocate(self):
+        s = self.system
+        nn, ns, nb = s.n_nodes, s.n_segments, s.n_rigid
+        mk = MAX_SEGS_PER_NODE
+        self.hist_r = np.zeros((3, nn, 3))
+        self.hist_ang = np.zeros((3, nb, 3))
+        self.tens_hist = np.zeros((2, ns))
+        self.top_react = np.zeros(3)
+        self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react)
+        self._ws = (np.zeros((ns, 3)), np.zeros(ns), np.zeros((ns, 3)), np.zeros((ns, 3, 3)), np.zeros((ns, 3, 3)),
+                    np.zeros((nn, 3, 3)), np.zeros((nn, 3, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)),
+                    np.zeros((nn, mk, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)), np.zeros(ns), np.zeros((nn, mk, mk)),
+                    np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns),
+                    np.zeros((nb, 3, 3)), np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nb, 3)),
+                    np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros(3), np.zeros(3), np.zeros((3, 3)),
+                    np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
+                    np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3))
+        self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)))
+        self.counters = np.zeros(4, np.int64)
+        self._args = (s.top_node, s.topo(), s.segp(), s.bodyp(), s.env())
+
+    def _initial_state(self):
+        s = self.system
+        dt = self.settings.dt
+        U = self.path.initial_velocity()
+        x0 = self.path.position(np.array([0.0]))[0]
+        r0, T0, ang0 = quasi_static(s, x0, U)
+        self.static_positions, self.static_tensions, self.static_angles = r0.copy(), T0.copy(), ang0.copy()
+        for k in range(3):
+            self.hist_r[k] = r0 - k * dt * U
+            self.hist_ang[k] = ang0
+        self.tens_hist[:] = T0
+        self.step_count = 0
+        settle = float(self.settings.settle_time or 0.0)
+        if settle > 0:
+            n = int(round(settle / dt))
+            tops = x0 + np.outer(dt * np.arange(1, n + 1), U)
+            self._run(tops, dt, t_start=-settle)
+            shift = n * dt * U
+            self.hist_r -= shift
+            self.step_count = 0
+        self.counters[:] = 0
+
+    # ------------------------------------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        return self.settings.dt
+
+    @property
+    def t(self) -> float:
+        return self.step_count * self.settings.dt
+
+    def snapshot(self) -> Snapshot:
+        return Snapshot(self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy(), self.top_react.copy(),
+                        self.step_count)
+
+    def restore(self, snap: Snapshot) -> None:
+        self.hist_r[...] = snap.hist_r
+        self.hist_ang[...] = snap.hist_ang
+        self.tens_hist[...] = snap.tens_hist
+        self.top_react[...] = snap.top_react
+        self.step_count = snap.step
+
+    def reset(self) -> None:
+        """Back to the settled initial state at t = 0."""
+        self.restore(self._initial)
+        self.counters[:] = 0
+
+    def _run(self, tops, dt, t_start):
+        st, k, el, md = K.advance(len(tops), dt, tops, *self._args[:1], *self._args[1:], self.settings.array(),
+                                  self._state, self._ws, self._saved, self.counters)
+        if st != K.OK:
+            t_fail = t_start + (k + 1) * dt
+            raise SimulationDivergence(t_fail, self._element_name(st, el), _CAUSES.get(st, f"status {st}"),
+                                       int(self.settings.max_iterations), float(md))
+
+    def advance(self, seconds: float) -> None:
+        """Advance by ``seconds`` (rounded to whole steps of ``dt``)."""
+        n = int(round(seconds / self.settings.dt))
+        self.advance_steps(n)
+
+    def advance_steps(self, n: int) -> None:
+        if n <= 0:
+            return
+        dt = self.settings.dt
+        times = (self.step_count + np.arange(1, n + 1)) * dt
+        tops = self.path.position(times)
+        t0 = self.t
+        try:
+            self._run(tops, dt, t0)
+        except SimulationDivergence as exc:
+            # the kernel stopped at the last good step: count the steps that did succeed
+            self.step_count += int(round((exc.time - t0) / dt)) - 1
+            raise
+        self.step_count += n
+
+    # ------------------------------------------------------------------------------------------
+    def _element_name(self, status, el):
+        s = self.system
+        if el < 0:
+            return "the system"
+        if status == K.FAIL_ANGLE:
+            names = [b.name for b in s.bodies if b.rigid_index == el]
+            return f"body {names[0]!r}" if names else f"body {el}"
+        if status in (K.FAIL_NEWTON, K.FAIL_STRETCH):
+            for lm in s.lines:
+                if el in lm.segments:
+                    return f"segment {int(np.where(lm.segments == el)[0][0])} of line {lm.name!r} (global {el})"
+            return f"segment {el}"
+        return f"element {el}"
+
+    @property
+    def positions(self) -> np.ndarray:
+        return self.hist_r[0]
+
+    @property
+    def velocities(self) -> np.ndarray:
+        return (3 * self.hist_r[0] - 4 * self.hist_r[1] + self.hist_r[2]) / (2 * self.settings.dt)
+
+    @property
+    def tensions(self) -> np.ndarray:
+        return self.tens_hist[0]
+
+    @property
+    def top_force(self) -> np.ndarray:
+        """Force of the cable on the vessel at the tow point (N, global axes)."""
+        return self.top_react.copy()
+
+    @property
+    def top_tension(self) -> float:
+        """Magnitude of the tow-point reaction (N)."""
+        return float(np.linalg.norm(self.top_react))
+
+    def line_state(self, name):
+        lm = self.system.line(name)
+        return {"positions": self.positions[lm.nodes].copy(), "tensions": self.tensions[lm.segments].copy()}
+
+    def body_state(self, name):
+        bm = self.system.body(name)
+        pos = self.positions[bm.node].copy()
+        vel = self.velocities[bm.node].copy()
+        if bm.rigid_index >= 0:
+            ang = self.hist_ang[0, bm.rigid_index].copy()
+            dang = (3 * self.hist_ang[0, bm.rigid_index] - 4 * self.hist_ang[1, bm.rigid_index]
+                    + self.hist_ang[2, bm.rigid_index]) / (2 * self.settings.dt)
+            w = np.empty(3)
+            K.euler_rates_to_omega(ang, dang, w)
+        else:
+            ang = np.zeros(3)
+            w = np.zeros(3)
+        return {"position": pos, "velocity": vel, "euler": ang, "omega": w}
+
+    @property
+    def stats(self):
+        c = self.counters
+        return {"steps": int(c[0]), "iterations": int(c[1]), "max_iterations": int(c[2]), "step_cuts": int(c[3]),
+                "mean_iterations": float(c[1] / max(c[0], 1))}
+
+
+def time_step_guide(T_keep: float, scheme: str = "houbolt", tolerance: str = "1%") -> float:
+    """Largest Δt keeping amplitude decay and period elongation per period within 1 % (or 5 %) for
+    the shortest period ``T_keep`` you need resolved (model.md 8.1/8.3: Houbolt T/42 and T/23)."""
+    table = {("houbolt", "1%"): 0.024, ("houbolt", "5%"): 0.044}
+    try:
+        return T_keep * table[(scheme, tolerance)]
+    except KeyError:
+        raise ValueError(f"time_step_guide: scheme must be 'houbolt' and tolerance '1%' or '5%' "
+                         f"(got {scheme!r}, {tolerance!r})") from None
+
+
+def thesis_time_step(l_min: float, EA: float, mu: float) -> float:
+    """The thesis's guide (5.188): Δt ≤ l_min/(10 c_L), c_L = √(EA/μ). One tenth of the explicit CFL
+    limit: very conservative for this implicit solver (model.md 8.2)."""
+    return l_min / (10.0 * math.sqrt(EA / mu))
+
+
+def transverse_courant_time_step(l_min: float, T_max: float, mu: float, mu_added: float, courant: float = 0.5):
+    """Δt keeping the transverse Courant number c_T Δt / l ≤ ``courant`` — the practical convergence limit
+    of the quasi-Newton tension iteration (model.md 5.9)."""
+    return courant * l_min / math.sqrt(T_max / (mu + mu_added))

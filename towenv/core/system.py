@@ -1,0 +1,437 @@
+"""Flat-array description of a towed system (nodes, segments, bodies), built from a validated scene.
+
+Numbering: every line is discretised from its top end (toward the ship) to its bottom end. A segment's
+``upper`` node is the one toward the ship. Node kinds: ``FREE`` (dynamic), ``PRESCRIBED_TOP`` (the
+vessel tow point, or the compensator/winch top) and ``PRESCRIBED_AFT`` (an aft tow point carried by a
+body, top of a series-tow tail cable).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .kernels import FREE, PRESCRIBED_AFT, PRESCRIBED_TOP
+
+MAX_SEGS_PER_NODE = 8
+BODY_PARAM = 30          # see the layout in _rigid_body_params
+MAX_TABLE = 64
+
+
+@dataclass
+class LineMap:
+    """Where a scene line lives in the flat arrays (nodes listed top → bottom)."""
+    name: str
+    nodes: np.ndarray          # node indices, top first
+    segments: np.ndarray       # segment indices, top first
+    length: float
+
+
+@dataclass
+class BodyMap:
+    name: str
+    kind: str                  # fish | depressor | ball | clump
+    node: int                  # tow-point node
+    rigid_index: int           # index in the rigid-body arrays, -1 for point bodies
+    aft_node: int = -1
+
+
+@dataclass
+class System:
+    # topology
+    seg_lo: np.ndarray
+    seg_up: np.ndarray
+    seg_uplocal: np.ndarray
+    node_kind: np.ndarray
+    node_nseg: np.ndarray
+    node_segs: np.ndarray
+    node_sgn: np.ndarray
+    order: np.ndarray
+    pos: np.ndarray
+    node_parent: np.ndarray     # parent in the static/elimination tree (-1 at the top)
+    node_up_seg: np.ndarray     # segment toward the ship (-1 for prescribed nodes)
+    post_order: np.ndarray      # nodes, leaves first
+    top_node: int
+    # segment properties
+    l0: np.ndarray
+    diam: np.ndarray
+    mu: np.ndarray
+    cn: np.ndarray
+    ct: np.ndarray
+    can: np.ndarray
+    cat: np.ndarray
+    ea: np.ndarray
+    # bodies
+    body_node: np.ndarray       # rigid bodies only
+    body_aft_node: np.ndarray
+    bp: np.ndarray
+    btab_n: np.ndarray
+    btab: np.ndarray
+    pb_mass: np.ndarray         # point bodies, per node
+    pb_vol: np.ndarray
+    pb_cda: np.ndarray
+    pb_ca: np.ndarray
+    # environment
+    rho: float
+    g: float
+    cur_z: np.ndarray
+    cur_v: np.ndarray
+    lines: list[LineMap] = field(default_factory=list)
+    bodies: list[BodyMap] = field(default_factory=list)
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.node_kind.shape[0])
+
+    @property
+    def n_segments(self) -> int:
+        return int(self.l0.shape[0])
+
+    @property
+    def n_rigid(self) -> int:
+        return int(self.body_node.shape[0])
+
+    def topo(self):
+        return (self.seg_lo, self.seg_up, self.seg_uplocal, self.node_kind, self.node_nseg, self.node_segs,
+                self.node_sgn, self.order, self.pos, self.body_node, self.body_aft_node)
+
+    def segp(self):
+        return (self.l0, self.diam, self.mu, self.cn, self.ct, self.can, self.cat, self.ea)
+
+    def bodyp(self):
+        return (self.bp, self.btab_n, self.btab, self.pb_mass, self.pb_vol, self.pb_cda, self.pb_ca)
+
+    def env(self):
+        return (float(self.rho), float(self.g), self.cur_z, self.cur_v)
+
+    def line(self, name: str) -> LineMap:
+        for lm in self.lines:
+            if lm.name == name:
+                return lm
+        raise KeyError(f"no line named {name!r}; lines: {[lm.name for lm in self.lines]}")
+
+    def body(self, name: str) -> BodyMap:
+        for bm in self.bodies:
+            if bm.name == name:
+                return bm
+        raise KeyError(f"no body named {name!r}; bodies: {[bm.name for bm in self.bodies]}")
+
+
+def mirrored_table(inc, cd, cl, cm):
+    """Mirror a table given for incidence ≥ 0: drag even, lift and moment odd about their value at 0."""
+    inc = np.asarray(inc, float)
+    cd, cl, cm = (np.asarray(x, float) for x in (cd, cl, cm))
+    if inc[0] != 0.0 or len(inc) < 2:
+        return inc, cd, cl, cm
+    inc2 = np.concatenate([-inc[:0:-1], inc])
+    cd2 = np.concatenate([cd[:0:-1], cd])
+    cl2 = np.concatenate([2 * cl[0] - cl[:0:-1], cl])
+    cm2 = np.concatenate([2 * cm[0] - cm[:0:-1], cm])
+    return inc2, cd2, cl2, cm2
+
+
+def _slope_at_zero(inc, cl):
+    i = int(np.argmin(np.abs(inc)))
+    j = i + 1 if i + 1 < len(inc) else i - 1
+    if j < 0 or inc[j] == inc[i]:
+        return 0.0
+    return abs((cl[j] - cl[i]) / np.radians(inc[j] - inc[i]))
+
+
+def _get(obj, name, default=None):
+    if isinstance(obj, dict):
+        return obj.get(name, default)
+    return getattr(obj, name, default)
+
+
+def _attachment(end):
+    """Normalise a line end: returns ('vessel'|'free'|'line'|'body', name, distance)."""
+    if isinstance(end, str):
+        return (end, None, None)
+    if _get(end, "line") is not None:
+        return ("line", _get(end, "line"), float(_get(end, "distance")))
+    if _get(end, "body") is not None:
+        return ("body", _get(end, "body"), None)
+    kind = _get(end, "kind") or _get(end, "type")
+    if kind in ("vessel", "free"):
+        return (kind, None, None)
+    raise ValueError(f"unrecognised line end {end!r}")
+
+
+def _span_segments(nseg, spans):
+    if isinstance(nseg, (list, tuple)):
+        counts = [int(x) for x in nseg]
+        if len(counts) != len(spans):
+            raise ValueError(f"segments list has {len(counts)} entries but the line has {len(spans)} spans")
+        return counts
+    n = int(nseg)
+    total = sum(spans)
+    counts = [max(1, int(round(n * sp / total))) for sp in spans]
+    # fix the total while keeping >= 1 per span
+    while sum(counts) > n and max(counts) > 1:
+        i = int(np.argmax([c / sp for c, sp in zip(counts, spans)]))
+        if counts[i] > 1:
+            counts[i] -= 1
+        else:
+            break
+    while sum(counts) < n:
+        i = int(np.argmax([sp / c for c, sp in zip(counts, spans)]))
+        counts[i] += 1
+    return counts
+
+
+def build_system(scene) -> System:
+    """Discretise a validated scene into flat arrays."""
+    water = _get(scene, "water")
+    rho = float(_get(water, "density", 1025.0)) if water is not None else 1025.0
+    g = float(_get(water, "gravity", 9.80665)) if water is not None else 9.80665
+    lines = list(_get(scene, "lines"))
+    bodies = list(_get(scene, "bodies", []) or [])
+    body_by_name = {_get(b, "name"): b for b in bodies}
+
+    # junctions on each line: distance from the line's top end -> list of child line names
+    junctions: dict[str, list[float]] = {_get(ln, "name"): [] for ln in lines}
+    for ln in lines:
+        kind, name, dist = _attachment(_get(ln, "top"))
+        if kind == "line":
+            junctions[name].append(dist)
+
+    nodes_pos_hint = []      # unused placeholder to keep node creation explicit
+    node_kind: list[int] = []
+
+    def new_node(kind=FREE):
+        node_kind.append(kind)
+        nodes_pos_hint.append(None)
+        return len(node_kind) - 1
+
+    top_node = new_node(PRESCRIBED_TOP)
+    seg_lo: list[int] = []
+    seg_up: list[int] = []
+    seg_prop: list[tuple] = []
+    line_maps: dict[str, LineMap] = {}
+    junction_node: dict[tuple[str, float], int] = {}
+    body_node_of: dict[str, int] = {}
+    aft_node_of: dict[str, int] = {}
+
+    # process lines parents-first
+    pending = list(lines)
+    done: set[str] = set()
+    guard = 0
+    while pending:
+        guard += 1
+        if guard > 10000:
+            raise ValueError("line topology is not a tree rooted at the vessel")
+        ln = pending.pop(0)
+        name = _get(ln, "name")
+        kind, ref, dist = _attachment(_get(ln, "top"))
+        if kind == "line" and ref not in done:
+            pending.append(ln)
+            continue
+        if kind == "body" and ref not in body_node_of:
+            pending.append(ln)
+            continue
+        if kind == "vessel":
+            top = top_node
+        elif kind == "line":
+            top = junction_node[(ref, dist)]
+        elif kind == "body":
+            if ref not in aft_node_of:
+                aft_node_of[ref] = new_node(PRESCRIBED_AFT)
+            top = aft_node_of[ref]
+        else:
+            raise ValueError(f"lines.{name}.top: cannot be {kind!r}")
+        length = float(_get(ln, "length"))
+        cuts = sorted(set(junctions[name]))
+        bounds = [0.0] + cuts + [length]
+        spans = [bounds[i + 1] - bounds[i] for i in range(len(bounds) - 1)]
+        counts = _span_segments(_get(ln, "segments"), spans)
+        props = (float(_get(ln, "diameter")), float(_get(ln, "mass_per_length")), float(_get(ln, "cn", 1.2)),
+                 float(_get(ln, "ct", 0.01)), float(_get(ln, "can", 1.0)), float(_get(ln, "cat", 0.0)),
+                 float(_get(ln, "EA")))
+        bkind, bref, _ = _attachment(_get(ln, "bottom"))
+        lnodes = [top]
+        lsegs = []
+        for isp, (sp, cnt) in enumerate(zip(spans, counts)):
+            for k in range(cnt):
+                last = (isp == len(spans) - 1) and (k == cnt - 1)
+                if last and bkind == "body":
+                    nd = new_node(FREE)
+                    body_node_of[bref] = nd
+                else:
+                    nd = new_node(FREE)
+                seg_up.append(lnodes[-1])
+                seg_lo.append(nd)
+                seg_prop.append((sp / cnt,) + props)
+                lsegs.append(len(seg_lo) - 1)
+                lnodes.append(nd)
+            if isp < len(spans) - 1:
+                junction_node[(name, bounds[isp + 1])] = lnodes[-1]
+        line_maps[name] = LineMap(name, np.array(lnodes), np.array(lsegs), length)
+        done.add(name)
+
+    nn = len(node_kind)
+    ns = len(seg_lo)
+    seg_lo_a = np.array(seg_lo, np.int64)
+    seg_up_a = np.array(seg_up, np.int64)
+    node_nseg = np.zeros(nn, np.int64)
+    node_segs = -np.ones((nn, MAX_SEGS_PER_NODE), np.int64)
+    node_sgn = np.zeros((nn, MAX_SEGS_PER_NODE), np.float64)
+    seg_uplocal = np.zeros(ns, np.int64)
+    for s in range(ns):
+        for a, sg in ((seg_lo[s], 1.0), (seg_up[s], -1.0)):
+            k = node_nseg[a]
+            if k >= MAX_SEGS_PER_NODE:
+                raise ValueError(f"more than {MAX_SEGS_PER_NODE} segments meet at one node")
+            node_segs[a, k] = s
+            node_sgn[a, k] = sg
+            if sg < 0:
+                seg_uplocal[s] = k
+            node_nseg[a] += 1
+    node_up_seg = -np.ones(nn, np.int64)
+    for s in range(ns):
+        node_up_seg[seg_lo[s]] = s
+    node_parent = -np.ones(nn, np.int64)
+    for a in range(nn):
+        if node_up_seg[a] >= 0:
+            node_parent[a] = seg_up[node_up_seg[a]]
+    for bname, c in aft_node_of.items():
+        node_parent[c] = body_node_of[bname]
+    # post-order (children first) from the top node
+    children: list[list[int]] = [[] for _ in range(nn)]
+    for a in range(nn):
+        if node_parent[a] >= 0:
+            children[node_parent[a]].append(a)
+    post: list[int] = []
+    stack = [(top_node, 0)]
+    while stack:
+        a, state = stack.pop()
+        if state == 0:
+            stack.append((a, 1))
+            for c in children[a]:
+                stack.append((c, 0))
+        else:
+            post.append(a)
+    if len(post) != nn:
+        raise ValueError("line topology is not connected to the vessel")
+    order = np.array([node_up_seg[a] for a in post if node_up_seg[a] >= 0], np.int64)
+    pos = np.empty(ns, np.int64)
+    pos[order] = np.arange(ns)
+
+    sp = np.array(seg_prop, float).reshape(ns, 8)
+    l0, diam, mu, cn, ct, can, cat, ea = (sp[:, i].copy() for i in range(8))
+
+    # bodies
+    pb_mass = np.zeros(nn)
+    pb_vol = np.zeros(nn)
+    pb_cda = np.zeros(nn)
+    pb_ca = np.zeros(nn)
+    rigid = [b for b in bodies if _get(b, "kind") in ("fish", "depressor")]
+    nb = len(rigid)
+    body_node = np.zeros(nb, np.int64)
+    body_aft = -np.ones(nb, np.int64)
+    bp = np.zeros((nb, BODY_PARAM))
+    btab_n = np.zeros((nb, 2), np.int64)
+    btab = np.zeros((nb, 8, MAX_TABLE))
+    body_maps = []
+    ir = 0
+    for b in bodies:
+        name = _get(b, "name")
+        if name not in body_node_of:
+            raise ValueError(f"bodies.{name}: not attached to the bottom of any line")
+        nd = body_node_of[name]
+        kind = _get(b, "kind")
+        if kind in ("ball", "clump"):
+            pb_mass[nd] += float(_get(b, "mass"))
+            pb_vol[nd] += float(_get(b, "volume", 0.0))
+            pb_cda[nd] += float(_get(b, "drag_area", 0.0) or 0.0)
+            ca = _get(b, "added_mass_coefficient", 0.5)
+            pb_ca[nd] = float(0.5 if ca is None else ca)
+            body_maps.append(BodyMap(name, kind, nd, -1))
+            continue
+        body_node[ir] = nd
+        if name in aft_node_of:
+            body_aft[ir] = aft_node_of[name]
+        bp[ir] = _rigid_body_params(b)
+        tabs, n = _tables(b)
+        btab[ir, :, :] = tabs
+        btab_n[ir] = n
+        bp[ir, 19] = _slope_at_zero(tabs[0, :n[0]], tabs[2, :n[0]])
+        body_maps.append(BodyMap(name, kind, nd, ir, int(body_aft[ir])))
+        ir += 1
+
+    cur = _get(scene, "current")
+    cur_z, cur_v = current_table(cur)
+
+    return System(seg_lo=seg_lo_a, seg_up=seg_up_a, seg_uplocal=seg_uplocal,
+                  node_kind=np.array(node_kind, np.int64), node_nseg=node_nseg, node_segs=node_segs,
+                  node_sgn=node_sgn, order=order, pos=pos, node_parent=node_parent, node_up_seg=node_up_seg,
+                  post_order=np.array(post, np.int64), top_node=top_node,
+                  l0=l0, diam=diam, mu=mu, cn=cn, ct=ct, can=can, cat=cat, ea=ea,
+                  body_node=body_node, body_aft_node=body_aft, bp=bp, btab_n=btab_n, btab=btab,
+                  pb_mass=pb_mass, pb_vol=pb_vol, pb_cda=pb_cda, pb_ca=pb_ca,
+                  rho=rho, g=g, cur_z=cur_z, cur_v=cur_v,
+                  lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps)
+
+
+def current_table(cur):
+    if cur is None:
+        return np.zeros(1), np.zeros((1, 3))
+    depths = _get(cur, "depths")
+    if depths:
+        return (np.asarray(depths, float).copy(), np.asarray(_get(cur, "velocities"), float).reshape(-1, 3).copy())
+    vel = _get(cur, "velocity")
+    v = np.zeros(3) if vel is None else np.asarray(vel, float)
+    return np.zeros(1), v.reshape(1, 3).copy()
+
+
+def _vec(b, name, default):
+    v = _get(b, name)
+    return np.asarray(default if v is None else v, float)
+
+
+def _rigid_body_params(b) -> np.ndarray:
+    """Layout: 0 mass, 1 volume, 2 area, 3 length, 4-6 r_G, 7-9 r_B, 10-12 I_G (principal),
+    13-15 linear rotational damping, 16-18 quadratic rotational damping, 19 lift slope (per rad),
+    20-22 added mass, 23-25 added inertia, 26-28 aft tow point."""
+    p = np.zeros(BODY_PARAM)
+    p[0] = float(_get(b, "mass"))
+    p[1] = float(_get(b, "volume", 0.0))
+    p[2] = float(_get(b, "reference_area"))
+    p[3] = float(_get(b, "reference_length"))
+    cg = _vec(b, "cg", [0, 0, 0])
+    p[4:7] = cg
+    p[7:10] = _vec(b, "cb", cg)
+    p[10:13] = _vec(b, "inertia", [1, 1, 1])
+    p[13:16] = _vec(b, "rotational_damping", [0.1, 0.1, 0.1])
+    p[16:19] = _vec(b, "quadratic_rotational_damping", [0.5, 0.5, 0.5])
+    p[20:23] = _vec(b, "added_mass", [0, 0, 0])
+    p[23:26] = _vec(b, "added_inertia", [0, 0, 0])
+    p[26:29] = _vec(b, "aft_tow_point", [0, 0, 0])
+    return p
+
+
+def _table_arrays(t):
+    return (np.asarray(_get(t, "incidence_deg"), float), np.asarray(_get(t, "drag"), float),
+            np.asarray(_get(t, "lift"), float), np.asarray(_get(t, "moment"), float))
+
+
+def _tables(b):
+    vt = mirrored_table(*_table_arrays(_get(b, "coefficients")))
+    ht_src = _get(b, "horizontal_coefficients")
+    if ht_src is None:
+        inc, cd, cl, cm = _table_arrays(_get(b, "coefficients"))
+        if _get(b, "kind") == "depressor":
+            cl = cl - cl[np.argmin(np.abs(inc))]
+        ht = mirrored_table(inc, cd, cl, cm)
+    else:
+        ht = mirrored_table(*_table_arrays(ht_src))
+    out = np.zeros((8, MAX_TABLE))
+    n = np.zeros(2, np.int64)
+    for j, tab in enumerate((vt, ht)):
+        m = len(tab[0])
+        if m > MAX_TABLE:
+            raise ValueError(f"coefficient tables longer than {MAX_TABLE} rows (after mirroring) are not supported")
+        for k in range(4):
+            out[4 * j + k, :m] = tab[k]
+        n[j] = m
+    return out, n
