@@ -123,16 +123,21 @@ def table_lookup(x, xs, ys, n):
 @njit(cache=True)
 def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
                   tang, stretched, drag, bmat, madd):
-    """Per-segment tangent, stretched length, Morison drag, drag damping matrix and added mass.
+    """Per-segment tangent, stretched length, Morison drag, drag damping matrices and added mass.
 
-    ``drag[s]``: total quadratic drag on the segment (opposes the relative velocity, vector normal form,
-    model.md 2.3), to be split half/half onto its end nodes. ``bmat[s]``: −∂drag/∂v (SPD), used for the
-    implicit drag of the node mass. ``madd[s]``: added-mass tensor of the whole segment.
-    Wet weight and dry mass are linear in ``l0`` and are added in ``node_assembly``.
+    Drag is evaluated at each end node with that node's relative velocity ``ṙ − V_c(r)`` and the
+    segment's tangent (vector normal form, opposing the relative velocity, model.md 2.3 / erratum E6):
+    ``drag[s, e] = −½ρ D l (C_n |v_n| v_n + C_t |v_t| v_t)`` for end ``e`` (0 = lower, 1 = upper node);
+    each end node receives half of its own value (trapezoidal rule along the segment). This differs from
+    the thesis's midpoint rule (drag of the mean end velocity, (3.10)) only at second order in the
+    segment length, but makes the drag of a node depend on that node's velocity alone, so the implicit
+    drag linearisation ``bmat[s, e] = −∂drag[s, e]/∂v`` is exact inside the node-local solve (the
+    Newton iteration then converges in a few sweeps even when drag dominates inertia).
+    ``madd[s]``: added-mass tensor of the whole segment. Wet weight and dry mass are added in
+    ``node_assembly``.
     """
     nseg = seg_lo.shape[0]
     vc = np.empty(3)
-    vr = np.empty(3)
     for s in range(nseg):
         a = seg_lo[s]
         b = seg_up[s]
@@ -149,39 +154,37 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
             tang[s, 0] = 0.0
             tang[s, 1] = 0.0
             tang[s, 2] = 1.0
-        # relative velocity: mean of the two end nodes' (velocity - current)  (thesis 3.9-3.10)
-        current_at(r[a, 2], cur_z, cur_v, vc)
-        for k in range(3):
-            vr[k] = 0.5 * (v[a, k] - vc[k])
-        current_at(r[b, 2], cur_z, cur_v, vc)
-        for k in range(3):
-            vr[k] += 0.5 * (v[b, k] - vc[k])
         t0 = tang[s, 0]
         t1 = tang[s, 1]
         t2 = tang[s, 2]
-        vt_mag = vr[0] * t0 + vr[1] * t1 + vr[2] * t2
-        vn0 = vr[0] - vt_mag * t0
-        vn1 = vr[1] - vt_mag * t1
-        vn2 = vr[2] - vt_mag * t2
-        vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
         kn = 0.5 * rho * cn[s] * diam[s] * l0[s]
         kt = 0.5 * rho * ct[s] * diam[s] * l0[s]
-        avt = abs(vt_mag)
-        drag[s, 0] = -kn * vn_abs * vn0 - kt * avt * vt_mag * t0
-        drag[s, 1] = -kn * vn_abs * vn1 - kt * avt * vt_mag * t1
-        drag[s, 2] = -kn * vn_abs * vn2 - kt * avt * vt_mag * t2
-        # damping matrix B = kn(|vn|(1 - t t^T) + vn vn^T/|vn|) + 2 kt |vt| t t^T
-        for i in range(3):
-            for j in range(3):
-                tt = tang[s, i] * tang[s, j]
-                proj = (1.0 if i == j else 0.0) - tt
-                bij = kn * vn_abs * proj + 2.0 * kt * avt * tt
-                bmat[s, i, j] = bij
-        if vn_abs > 1e-12:
-            vn = (vn0, vn1, vn2)
+        for e in range(2):
+            nd = a if e == 0 else b
+            current_at(r[nd, 2], cur_z, cur_v, vc)
+            vr0 = v[nd, 0] - vc[0]
+            vr1 = v[nd, 1] - vc[1]
+            vr2 = v[nd, 2] - vc[2]
+            vt_mag = vr0 * t0 + vr1 * t1 + vr2 * t2
+            vn0 = vr0 - vt_mag * t0
+            vn1 = vr1 - vt_mag * t1
+            vn2 = vr2 - vt_mag * t2
+            vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
+            avt = abs(vt_mag)
+            drag[s, e, 0] = -kn * vn_abs * vn0 - kt * avt * vt_mag * t0
+            drag[s, e, 1] = -kn * vn_abs * vn1 - kt * avt * vt_mag * t1
+            drag[s, e, 2] = -kn * vn_abs * vn2 - kt * avt * vt_mag * t2
+            # B = kn(|vn|(1 - t t^T) + vn vn^T/|vn|) + 2 kt |vt| t t^T
             for i in range(3):
                 for j in range(3):
-                    bmat[s, i, j] += kn * vn[i] * vn[j] / vn_abs
+                    tt = tang[s, i] * tang[s, j]
+                    proj = (1.0 if i == j else 0.0) - tt
+                    bmat[s, e, i, j] = kn * vn_abs * proj + 2.0 * kt * avt * tt
+            if vn_abs > 1e-12:
+                vn = (vn0, vn1, vn2)
+                for i in range(3):
+                    for j in range(3):
+                        bmat[s, e, i, j] += kn * vn[i] * vn[j] / vn_abs
         area = 0.25 * math.pi * diam[s] * diam[s]
         amt = cat[s] * rho * area * l0[s]
         amn = can[s] * rho * area * l0[s]
@@ -192,13 +195,13 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
 
 
 @njit(cache=True)
-def node_assembly(r, v, node_kind, node_nseg, node_segs, l0, diam, mu, rho, g, drag, bmat, madd,
+def node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
                   pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode):
     """Node mass matrices (dry + added mass), drag damping matrices and non-tension forces.
 
-    Each segment gives half of its mass, added mass, wet weight and drag to each end node (thesis §3.3).
-    Point bodies (ball/clump) add their mass + added mass (isotropic), wet weight and isotropic
-    quadratic drag ``-½ρ CdA |v_r| v_r``.
+    Each segment gives half of its mass, added mass and wet weight to each end node (thesis §3.3), and
+    half of the drag evaluated at that node (see ``segment_loads``). Point bodies (ball/clump) add their
+    mass + added mass (isotropic), wet weight and isotropic quadratic drag ``-½ρ CdA |v_r| v_r``.
     """
     nn = node_kind.shape[0]
     vc = np.empty(3)
@@ -210,14 +213,15 @@ def node_assembly(r, v, node_kind, node_nseg, node_segs, l0, diam, mu, rho, g, d
                 bnode[a, i, j] = 0.0
         for k in range(node_nseg[a]):
             s = node_segs[a, k]
+            e = 0 if node_sgn[a, k] > 0.0 else 1
             m_half = 0.5 * mu[s] * l0[s]
             wet = 0.5 * (mu[s] - rho * 0.25 * math.pi * diam[s] * diam[s]) * g * l0[s]
             for i in range(3):
                 mnode[a, i, i] += m_half
-                fnode[a, i] += 0.5 * drag[s, i]
+                fnode[a, i] += 0.5 * drag[s, e, i]
                 for j in range(3):
                     mnode[a, i, j] += 0.5 * madd[s, i, j]
-                    bnode[a, i, j] += 0.5 * bmat[s, i, j]
+                    bnode[a, i, j] += 0.5 * bmat[s, e, i, j]
             fnode[a, 2] -= wet
         # point body
         if pb_mass[a] > 0.0:
@@ -437,12 +441,15 @@ def assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qve
 
 @njit(cache=True)
 def tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb, rhs, x):
-    """Solve K x = rhs for the tree-structured SPD tension matrix by LDLᵀ without fill-in.
+    """Solve K x = rhs for the tree-structured tension matrix by LU (LDLᵀ when K is symmetric) without fill-in.
 
     ``order`` eliminates segments from the free ends toward the ship (each after every segment below
     it). A segment's later neighbours all sit at its upper node, whose segments form a clique, so the
     elimination creates no fill (model.md 5.6). O(n); ``kd``, ``kb`` and ``rhs`` are overwritten.
-    Returns False if a pivot is not positive (the matrix is not SPD).
+    K is symmetric positive definite when every node mass matrix is symmetric; a rigid body's full
+    (non-symmetric) hydrodynamic damping makes its node's block slightly non-symmetric, which this
+    elimination handles as an LU without pivoting (the matrix stays strongly diagonal).
+    Returns False if a pivot is not positive.
     """
     n = order.shape[0]
     for ip in range(n):
@@ -464,7 +471,7 @@ def tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs,
                 continue
             f = l1 / d
             rhs[q1] -= f * rhs[p]
-            kd[q1] -= f * l1
+            kd[q1] -= f * kb[a, kp, k1]
             for k2 in range(ns):
                 q2 = node_segs[a, k2]
                 if k2 == k1 or pos[q2] <= ip:
@@ -529,6 +536,58 @@ def node_reaction(c, r, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, t
 
 
 @njit(cache=True)
+def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0, bkc):
+    """Diagonal estimates of −∂M_i/∂θ_i (stiffness) and −∂M_i/∂ω_i (damping) of the body loads, by
+    finite differences, clipped at zero. Used only to relax the body-angle update (convergence rate)."""
+    lam = np.empty((3, 3))
+    vb = np.empty(3)
+    f = np.empty(3)
+    m = np.empty(3)
+    bd = np.empty(1)
+    ang2 = np.empty(3)
+    w2 = np.empty(3)
+    eps_a = 1e-5
+    eps_w = 1e-4
+    for i in range(3):
+        for k in range(3):
+            ang2[k] = ang[k]
+            w2[k] = w[k]
+        ang2[i] += eps_a
+        rotation_matrix(ang2[0], ang2[1], ang2[2], lam)
+        for k in range(3):
+            vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
+        body_loads(b, lam, vb, w, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
+        kk = -(m[i] - m0[i]) / eps_a
+        bkc[b, i] = kk if kk > 0.0 else 0.0
+        rotation_matrix(ang[0], ang[1], ang[2], lam)
+        for k in range(3):
+            vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
+        w2[i] += eps_w
+        body_loads(b, lam, vb, w2, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
+        cc = -(m[i] - m0[i]) / eps_w
+        bkc[b, 3 + i] = cc if cc > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0, out):
+    """D = −∂F/∂v of the body's hydrodynamic force (body axes) by finite differences. Used only as the
+    implicit-damping linearisation of the tow-point node (convergence rate, not the solution)."""
+    f = np.empty(3)
+    m = np.empty(3)
+    bd = np.empty(1)
+    v2 = np.empty(3)
+    vmag = math.sqrt(vbody[0] ** 2 + vbody[1] ** 2 + vbody[2] ** 2)
+    eps = 1e-6 * (1.0 + vmag)
+    for j in range(3):
+        for k in range(3):
+            v2[k] = vbody[k]
+        v2[j] += eps
+        body_loads(b, lam, v2, w, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
+        for i in range(3):
+            out[i, j] = -(f[i] - f0[i]) / eps
+
+
+@njit(cache=True)
 def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
@@ -548,7 +607,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     hist_r, hist_ang, tens_hist, top_react = state
     (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
      gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
-     fb, mb, bdiag, react) = ws
+     fb, mb, bdiag, react, bkc, bdmat) = ws
 
     nn = node_kind.shape[0]
     ns = l0.shape[0]
@@ -572,7 +631,8 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
     place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
     for s in range(ns):
-        tens[s] = tens_hist[0, s]
+        tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
+        tens[s] = tp if tp > 0.0 else 0.0
 
     status = FAIL_NEWTON
     elem = -1
@@ -585,7 +645,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt
         segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
                       tang, stretched, drag, bmat, madd)
-        node_assembly(rs, vs, node_kind, node_nseg, node_segs, l0, diam, mu, rho, g, drag, bmat, madd,
+        node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
                       pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode)
         for b in range(nb):
             a = body_node[b]
@@ -601,6 +661,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             zc = rs[a, 2] + lam[0, 2] * bp[b, 7] + lam[1, 2] * bp[b, 8] + lam[2, 2] * bp[b, 9]
             current_at(zc, cur_z, cur_v, cur_b)
             body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
+            if it == 1:
+                _rotational_stiffness(b, angs[b], vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc)
+                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b])
             c = body_aft_node[b]
             if c >= 0:
                 node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
@@ -624,6 +687,8 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             for i in range(3):
                 fb[i] -= mass * tmp3[i]
             body_mass_blocks(b, bp, att, atr, arr)
+            for i in range(3):
+                bkc[b, 6 + i] = arr[i, i]
             # I_o ω (rigid part only: arr minus added inertia)
             for i in range(3):
                 hvec[i] = 0.0
@@ -661,21 +726,37 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                             sacc += lam[k, i] * tmp33b[k, m] * lam[m, j]
                     mnode[a, i, j] += sacc
                 fnode[a, i] += lam[0, i] * tmp3[0] + lam[1, i] * tmp3[1] + lam[2, i] * tmp3[2]
-                bnode[a, i, i] += bdiag[0]
+            # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
+            for i in range(3):
+                for j in range(3):
+                    sacc = 0.0
+                    for k in range(3):
+                        for m in range(3):
+                            sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
+                    bnode[a, i, j] += sacc
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
         for a in range(nn):
             if node_kind[a] != FREE:
                 continue
+            # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
+            # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
+            # both sides, so they change the convergence rate only, never the converged solution.
             for i in range(3):
                 for j in range(3):
-                    tmp33[i, j] = mnode[a, i, j] + c11 * bnode[a, i, j]
+                    kg = 0.0
+                    for k in range(node_nseg[a]):
+                        sk = node_segs[a, k]
+                        if stretched[sk] > 0.0:
+                            kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+                    att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
+                    tmp33[i, j] = mnode[a, i, j] + att[i, j]
             if not _inv3(tmp33, tmp33b):
                 return FAIL_NAN, it, a, 0.0
             for i in range(3):
                 hi = 0.0
                 for j in range(3):
                     hj = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
-                    hi += mnode[a, i, j] * hj + c11 * bnode[a, i, j] * rs[a, j]
+                    hi += mnode[a, i, j] * hj + att[i, j] * rs[a, j]
                 tmp3[i] = hi + hdt2 * fnode[a, i]
             for i in range(3):
                 acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
@@ -762,6 +843,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
             for i in range(3):
                 na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
+                # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
+                # of the fixed-point update that leaves the converged solution unchanged
+                na = angs[b, i] + (na - angs[b, i]) / (1.0 + (hdt2 * bkc[b, i] + c11 * bkc[b, 3 + i]) / bkc[b, 6 + i])
                 dd = abs(na - angs[b, i])
                 if not (dd <= dang_max):
                     dang_max = dd

@@ -42,13 +42,13 @@ class Snapshot:
 @dataclass
 class SolverSettings:
     dt: float = 0.02
-    tolerance: float = 0.1
-    relative_tolerance: float = 1e-6
+    tolerance: float = 0.5
+    relative_tolerance: float = 1e-5
     max_iterations: int = 25
     max_step_cuts: int = 4
     max_strain: float = 0.2
     settle_time: float = 0.0
-    angle_tolerance: float = 1e-7
+    angle_tolerance: float = 1e-6
 
     def array(self):
         return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
@@ -99,14 +99,15 @@ class Simulator:
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
         self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react)
-        self._ws = (np.zeros((ns, 3)), np.zeros(ns), np.zeros((ns, 3)), np.zeros((ns, 3, 3)), np.zeros((ns, 3, 3)),
+        self._ws = (np.zeros((ns, 3)), np.zeros(ns), np.zeros((ns, 2, 3)), np.zeros((ns, 2, 3, 3)), np.zeros((ns, 3, 3)),
                     np.zeros((nn, 3, 3)), np.zeros((nn, 3, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)),
                     np.zeros((nn, mk, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)), np.zeros(ns), np.zeros((nn, mk, mk)),
                     np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns),
                     np.zeros((nb, 3, 3)), np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nb, 3)),
                     np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros(3), np.zeros(3), np.zeros((3, 3)),
                     np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
-                    np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3))
+                    np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3), np.zeros((max(nb, 1), 9)),
+                    np.zeros((max(nb, 1), 3, 3)))
         self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)))
         self.counters = np.zeros(4, np.int64)
         self._args = (s.top_node, s.topo(), s.segp(), s.bodyp(), s.env())
@@ -131,7 +132,23 @@ class Simulator:
             shift = n * dt * U
             self.hist_r -= shift
             self.step_count = 0
+        else:
+            self._static_reaction(U)
         self.counters[:] = 0
+
+    def _static_reaction(self, U):
+        """Tow-point reaction of the (steady) initial state, before any step was taken."""
+        s = self.system
+        ws = self._ws
+        r = self.hist_r[0]
+        v = np.tile(U, (s.n_nodes, 1))
+        tang, stretched, drag, bmat, madd, mnode, bnode, fnode = ws[:8]
+        K.segment_loads(r, v, s.seg_lo, s.seg_up, s.l0, s.diam, s.mu, s.cn, s.ct, s.can, s.cat, s.rho, s.g,
+                        s.cur_z, s.cur_v, tang, stretched, drag, bmat, madd)
+        K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g, drag, bmat,
+                        madd, s.pb_mass, s.pb_vol, s.pb_cda, s.pb_ca, s.cur_z, s.cur_v, mnode, bnode, fnode)
+        K.node_reaction(s.top_node, r, r, r, r, self.settings.dt, s.node_nseg, s.node_segs, s.node_sgn, tang,
+                        self.tens_hist[0], mnode, fnode, self.top_react)
 
     # ------------------------------------------------------------------------------------------
     @property

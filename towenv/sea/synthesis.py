@@ -37,7 +37,7 @@ from typing import Callable, Optional, Sequence, Union
 
 import numpy as np
 
-from .spectra import G, SeaState, spreading_function
+from .spectra import G, SeaState
 
 __all__ = [
     "WaveRecord",
@@ -288,6 +288,18 @@ class WaveRecord:
         x, y = _resolve_track(t, track)
         return self.elevation(t, x, y)
 
+    def elevation_at(self, t: float, x: float = 0.0, y: float = 0.0) -> float:
+        """Scalar fast path of :meth:`elevation` (one physics step; ~5 us for M = 300)."""
+        return float(np.cos(self.omega * t - self.kx * x - self.ky * y + self.phase) @ self.amplitude)
+
+    def elevation_and_rate_at(self, t: float, x: float = 0.0, y: float = 0.0, vx: float = 0.0,
+                              vy: float = 0.0) -> tuple[float, float]:
+        """Scalar fast path returning ``(eta, d eta/dt)`` for an observer moving at ``(vx, vy)``."""
+        P = self.omega * t - self.kx * x - self.ky * y + self.phase
+        a = self.amplitude
+        return (float(np.cos(P) @ a),
+                float(-(np.sin(P) @ (a * (self.omega - self.kx * vx - self.ky * vy)))))
+
     def _depth_factors(self, z: np.ndarray):
         """Horizontal and vertical decay factors, shape (rows, M), for z <= 0."""
         kz = np.multiply.outer(z, self.k)
@@ -370,6 +382,28 @@ class WaveRecord:
         return out[..., 0] if squeeze else out
 
     # ---- precomputation ----------------------------------------------------
+    def _uniform_sums(self, t_start: float, dt: float, n: int, we: np.ndarray, weights: np.ndarray,
+                      block: int = 512) -> np.ndarray:
+        """``Re sum_j W_jq exp(i (we_j t_m + phase_j))`` on ``t_m = t_start + m dt``.
+
+        Exact factorisation ``exp(i we (t_b + m dt)) = exp(i we m dt) exp(i we t_b)``
+        turns the sum into one complex matrix product per chunk of blocks (BLAS),
+        ~10x faster than evaluating n*M cosines.  Returns shape (n, q)."""
+        M, q = weights.shape
+        B = min(block, n)
+        nb = -(-n // B)
+        T = np.exp(1j * np.multiply.outer(dt * np.arange(B), we))  # (B, M)
+        out = np.empty((nb * B, q))
+        per = max(1, _CHUNK_ELEMS // (M * q))  # blocks per chunk
+        for b0 in range(0, nb, per):
+            b1 = min(nb, b0 + per)
+            tb = t_start + dt * B * np.arange(b0, b1)
+            Cb = np.exp(1j * (np.multiply.outer(we, tb) + self.phase[:, None]))  # (M, nbc)
+            R = T @ (weights[:, :, None] * Cb[:, None, :]).reshape(M, q * (b1 - b0))  # (B, q*nbc)
+            R = R.real.reshape(B, q, b1 - b0).transpose(2, 0, 1).reshape((b1 - b0) * B, q)
+            out[b0 * B:b1 * B] = R
+        return out[:n]
+
     def precompute(self, dt: float, t_end: Optional[float] = None, t_start: float = 0.0,
                    track: Optional[Track] = None, velocity: Optional[tuple] = None,
                    z: Optional[float] = None) -> "GriddedWave":
@@ -382,15 +416,20 @@ class WaveRecord:
         t_end : float, optional
             Last time; defaults to ``duration``.
         track : ``(x, y)`` arrays on the grid, or callable ``t -> (x, y)``, optional
-            Observer track (prescribed ship path); default: fixed at the origin.
-        velocity : ``(vx, vy)`` arrays on the grid, optional
-            Observer velocity for ``eta_rate``; default ``np.gradient`` of the track.
+            Observer track (a prescribed ship path, earth frame).
+        velocity : ``(vx, vy)``, optional
+            Without ``track``: a constant observer velocity; the observer is at
+            ``(vx t, vy t)`` (origin at t = 0; default at rest at the origin).
+            This case uses an exact BLAS factorisation (3 h at 50 Hz with
+            M = 300 in well under a second).  With ``track``: arrays of the
+            observer velocity for ``eta_rate`` (default ``np.gradient`` of the track).
         z : float, optional
-            If given, also store orbital velocity and acceleration at depth ``z``
-            below the observer.
+            If given, also store orbital velocity and acceleration at height ``z``
+            (<= 0) at the observer.
 
-        The result stores ``eta`` and ``eta_rate`` (float64, 16 bytes per step:
-        3 h at 50 Hz = 8.6 MB) and interpolates with cubic Hermite polynomials.
+        The result stores ``eta`` and ``eta_rate`` (16 bytes per step: 3 h at
+        50 Hz = 8.6 MB; with ``z`` another 48 bytes per step) and interpolates
+        with cubic Hermite polynomials.
         """
         dt = float(dt)
         if not math.isfinite(dt) or dt <= 0:
@@ -400,16 +439,36 @@ class WaveRecord:
         if not math.isfinite(t_end) or t_end <= t_start:
             raise ValueError("t_end must be finite and > t_start (set duration or pass t_end)")
         n = int(math.floor((t_end - t_start) / dt + 1e-9)) + 1
-        t = t_start + dt * np.arange(n)
+
         if track is None:
-            x = y = np.zeros(n)
-        else:
-            x, y = _resolve_track(t, track)
-            x = np.broadcast_to(np.asarray(x, dtype=float), t.shape)
-            y = np.broadcast_to(np.asarray(y, dtype=float), t.shape)
+            vx, vy = (0.0, 0.0) if velocity is None else (float(velocity[0]), float(velocity[1]))
+            we = self.omega - self.kx * vx - self.ky * vy
+            a = self.amplitude
+            cols = [a.astype(complex), 1j * we * a]
+            if z is not None:
+                zz = min(float(z), 0.0)
+                if self.depth is not None:
+                    zz = max(zz, -self.depth)
+                fh, fv = self._depth_factors(np.array([zz]))
+                fh, fv = fh[0], fv[0]
+                aw, aw2 = a * self.omega, a * self.omega**2
+                cth, sth = np.cos(self.direction), np.sin(self.direction)
+                cols += [aw * fh * cth, aw * fh * sth, 1j * aw * fv,
+                         1j * aw2 * fh * cth, 1j * aw2 * fh * sth, -aw2 * fv]
+            R = self._uniform_sums(float(t_start), dt, n, we, np.stack(cols, axis=1).astype(complex))
+            vel = acc = None
+            if z is not None:
+                vel, acc = np.ascontiguousarray(R[:, 2:5]), np.ascontiguousarray(R[:, 5:8])
+            return GriddedWave(float(t_start), dt, np.ascontiguousarray(R[:, 0]),
+                               np.ascontiguousarray(R[:, 1]), vel, acc)
+
+        t = t_start + dt * np.arange(n)
+        x, y = _resolve_track(t, track)
+        x = np.broadcast_to(np.asarray(x, dtype=float), t.shape)
+        y = np.broadcast_to(np.asarray(y, dtype=float), t.shape)
         if velocity is not None:
             vx, vy = velocity
-        elif track is not None and n > 1:
+        elif n > 1:
             vx, vy = np.gradient(x, dt), np.gradient(y, dt)
         else:
             vx = vy = 0.0
@@ -418,7 +477,7 @@ class WaveRecord:
         vel = acc = None
         if z is not None:
             vel, acc = self.kinematics(t, x, y, z)
-        return GriddedWave(t_start, dt, eta, eta_rate, vel, acc)
+        return GriddedWave(float(t_start), dt, eta, eta_rate, vel, acc)
 
 
 def _resolve_track(t, track):

@@ -1,0 +1,662 @@
+"""Plain-numpy twin of :mod:`towenv.core.kernels` (no numba), for testing the kernels.
+
+Every function here is written from the equations of ``model.md`` (sections 2, 3.3–3.4 and 5.1–5.6),
+vectorised over segments and nodes where that reads naturally, and deliberately *not* by transcribing the
+kernel loops. The tests (``tests/test_twin.py``) compare each numba kernel with its twin on random states.
+Speed is irrelevant here; clarity is the point.
+
+Conventions (same as the kernels): ``t_s`` is the unit tangent of segment ``s`` from its lower node to
+its upper node (toward the ship); ``σ_{a,s} = +1`` if node ``a`` is the lower node of ``s`` and ``−1`` if
+it is the upper one, so the tension force on node ``a`` is ``Σ_s σ_{a,s} T_s t_s``. ``F_o`` are all the
+non-tension forces on a node. Gravity is ``−g e_z``.
+
+The functions take the :class:`towenv.core.system.System` of the tow (duck-typed: only its arrays are
+read) and never modify their inputs.
+
+Contents
+
+* :func:`current_np`, :func:`rotation_matrix_np`, :func:`euler_rates_to_omega_np`,
+  :func:`omega_dot_to_euler_acc_np` — environment and body kinematics (model.md 1.4)
+* :func:`segment_loads_np` — tangents, stretched lengths, Morison drag, drag damping, added mass (2.2–2.3, 5.2)
+* :func:`node_assembly_np` — node mass matrices, damping matrices, non-tension forces (2.2–2.3, point bodies)
+* :func:`body_loads_np`, :func:`body_mass_blocks_np` — rigid-body loads and mass blocks (3.2–3.3)
+* :func:`tension_matrix_np`, :func:`solve_tension_np` — the tension system K = −J as scipy.sparse (5.4–5.6)
+* :func:`houbolt_step_np` — one full Houbolt step with the Newton iteration (5.1–5.2, 3.4, 9), with
+  :func:`geometric_stiffness_np` and :func:`rotational_stiffness_np` (convergence aids of the kernel)
+* :func:`thesis_shooting_recursion` — the thesis's printed recursion (4.38)–(4.40), *as published*; unstable,
+  kept only to document why it is not used (model.md 5.6)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+# status codes and node kinds (the same values as in towenv.core.kernels; the tests check this)
+OK = 0
+FAIL_NEWTON = 1
+FAIL_NAN = 2
+FAIL_STRETCH = 3
+FAIL_ANGLE = 4
+FREE = 0
+PRESCRIBED_TOP = 1
+PRESCRIBED_AFT = 2
+
+_I3 = np.eye(3)
+
+
+# ----------------------------------------------------------------------------------------------
+# environment and body kinematics
+# ----------------------------------------------------------------------------------------------
+def current_np(z, cur_z, cur_v):
+    """Current velocity (…, 3) at heights ``z`` (depth = −z): linear in depth, ends held (np.interp)."""
+    z = np.asarray(z, float)
+    depth = -z
+    return np.stack([np.interp(depth, cur_z, cur_v[:, k]) for k in range(3)], axis=-1)
+
+
+def _rx(b):
+    c, s = math.cos(b), math.sin(b)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
+
+
+def _ry(a):
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+
+
+def _rz(g):
+    c, s = math.cos(g), math.sin(g)
+    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_matrix_np(roll, pitch, yaw):
+    """Λ_f (global → body components): yaw about Z, then pitch about the new Y, then roll about the new X.
+
+    Built as the product of the three elementary (passive) rotations rather than the expanded formula."""
+    return _rx(roll) @ _ry(pitch) @ _rz(yaw)
+
+
+def _euler_rate_matrix(ang):
+    """W(θ) with ω = W(θ) θ̇, θ = (roll β, pitch α, yaw γ)."""
+    b, a = ang[0], ang[1]
+    cb, sb, ca, sa = math.cos(b), math.sin(b), math.cos(a), math.sin(a)
+    return np.array([[1.0, 0.0, -sa],
+                     [0.0, cb, ca * sb],
+                     [0.0, -sb, ca * cb]])
+
+
+def euler_rates_to_omega_np(ang, dang):
+    """Body rates (p, q, r) from Euler angles and their rates (model.md 1.4)."""
+    return _euler_rate_matrix(ang) @ np.asarray(dang, float)
+
+
+def omega_dot_to_euler_acc_np(ang, dang, omega, domega):
+    """θ̈ = H(θ) ω̇ + Ḣ(θ, θ̇) ω with H = W⁻¹ the exact z-y-x kinematics (model.md 1.4).
+
+    Ḣ = ∂H/∂β β̇ + ∂H/∂α α̇ (H does not depend on the yaw)."""
+    b, a = ang[0], ang[1]
+    cb, sb, ca, sa = math.cos(b), math.sin(b), math.cos(a), math.sin(a)
+    ta = sa / ca
+    H = np.array([[1.0, sb * ta, cb * ta],
+                  [0.0, cb, -sb],
+                  [0.0, sb / ca, cb / ca]])
+    dH_db = np.array([[0.0, cb * ta, -sb * ta],
+                      [0.0, -sb, -cb],
+                      [0.0, cb / ca, -sb / ca]])
+    dH_da = np.array([[0.0, sb / ca ** 2, cb / ca ** 2],
+                      [0.0, 0.0, 0.0],
+                      [0.0, sb * sa / ca ** 2, cb * sa / ca ** 2]])
+    Hdot = dH_db * dang[0] + dH_da * dang[1]
+    return H @ np.asarray(domega, float) + Hdot @ np.asarray(omega, float)
+
+
+# ----------------------------------------------------------------------------------------------
+# cable loads
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class SegmentLoads:
+    tang: np.ndarray        # (S, 3) unit tangents, lower → upper node
+    stretched: np.ndarray   # (S,)   ℓ_s
+    drag: np.ndarray        # (S, 2, 3) whole-segment Morison drag at the relative velocity of end e (0 lower, 1 upper)
+    bmat: np.ndarray        # (S, 2, 3, 3) B_e = −∂drag_e/∂v_r,e
+    madd: np.ndarray        # (S, 3, 3) added-mass tensor of the whole segment
+
+
+def _outer(a, b):
+    return a[..., :, None] * b[..., None, :]
+
+
+def morison_drag_np(vr, tang, kn, kt):
+    """Quadratic drag −k_n |v_n| v_n − k_t |v_t| v_t (vector normal form, model.md 2.3 / erratum E6) and its
+    damping matrix B = −∂f/∂v_r = k_n(|v_n|(𝟙 − t tᵀ) + v_n v_nᵀ/|v_n|) + 2 k_t |v_t| t tᵀ (model.md 5.2),
+    for relative velocities ``vr`` (…, 3) and tangents ``tang`` (…, 3); k = ½ρ C D l.
+    The v_n v_nᵀ/|v_n| term (→ 0 with |v_n|) is dropped below |v_n| = 1e-12 m/s."""
+    vt = np.einsum("...i,...i->...", vr, tang)
+    vn = vr - vt[..., None] * tang
+    vn_abs = np.linalg.norm(vn, axis=-1)
+    f = -(kn * vn_abs)[..., None] * vn - (kt * np.abs(vt) * vt)[..., None] * tang
+    tt = _outer(tang, tang)
+    inv_vn = np.where(vn_abs > 1e-12, 1.0 / np.where(vn_abs > 1e-12, vn_abs, 1.0), 0.0)
+    B = ((kn * vn_abs)[..., None, None] * (_I3 - tt) + (kn * inv_vn)[..., None, None] * _outer(vn, vn)
+         + (2.0 * kt * np.abs(vt))[..., None, None] * tt)
+    return f, B
+
+
+def segment_loads_np(sys, r, v) -> SegmentLoads:
+    """Per-segment tangent, stretched length, quadratic drag, drag damping and added mass.
+
+    Drag (model.md 2.3, vector normal form): the whole-segment drag ``f_d(v_r) = −k_n|v_n|v_n − k_t|v_t|v_t``
+    (k = ½ρ C D l) is evaluated at the relative velocity v_r,e = ṙ_e − V_c(r_e) of *each* end node e with the
+    segment tangent; node e receives ½ f_d(v_r,e) (trapezoidal rule along the segment, as the kernel does;
+    the thesis's (3.10) uses the mean end velocity instead, which differs at second order in l).
+    Added mass (2.2): Am = C_at ρ A l t tᵀ + C_an ρ A l (𝟙 − t tᵀ), A = πD²/4.
+    A zero-length segment gets the tangent e_z.
+    """
+    r = np.asarray(r, float)
+    v = np.asarray(v, float)
+    lo, up = sys.seg_lo, sys.seg_up
+    d = r[up] - r[lo]
+    ell = np.linalg.norm(d, axis=1)
+    safe = np.where(ell > 0.0, ell, 1.0)
+    tang = np.where((ell > 0.0)[:, None], d / safe[:, None], np.array([0.0, 0.0, 1.0]))
+
+    rho = float(sys.rho)
+    vrel_node = v - current_np(r[:, 2], sys.cur_z, sys.cur_v)
+    vr = np.stack([vrel_node[lo], vrel_node[up]], axis=1)                 # (S, 2, 3)
+    kn = 0.5 * rho * sys.cn * sys.diam * sys.l0
+    kt = 0.5 * rho * sys.ct * sys.diam * sys.l0
+    drag, bmat = morison_drag_np(vr, tang[:, None, :], kn[:, None], kt[:, None])
+
+    tt = _outer(tang, tang)
+    area_l = 0.25 * math.pi * sys.diam ** 2 * sys.l0
+    madd = (sys.cat * rho * area_l)[:, None, None] * tt + (sys.can * rho * area_l)[:, None, None] * (_I3 - tt)
+    return SegmentLoads(tang, ell, drag, bmat, madd)
+
+
+def node_assembly_np(sys, r, v, seg: SegmentLoads):
+    """Node mass matrices M_a (dry + added), drag damping matrices B_a and non-tension forces F_o,a.
+
+    Each segment gives half of its dry mass, added-mass tensor and wet weight to each end node, and to
+    each end node half of the drag (and damping matrix) evaluated at that node's relative velocity
+    (model.md 2.2–2.3, :func:`segment_loads_np`; scatter with ``np.add.at``). Point bodies (ball/clump) add
+    (m + C_a ρV) 𝟙, their wet weight (m − ρV) g and isotropic drag −½ρ CdA |v_r| v_r with its damping
+    matrix ½ρ CdA (|v_r| 𝟙 + v_r v_rᵀ/|v_r|). Returns (mnode, bnode, fnode).
+    """
+    r = np.asarray(r, float)
+    v = np.asarray(v, float)
+    nn = sys.node_kind.shape[0]
+    rho, g = float(sys.rho), float(sys.g)
+    mnode = np.zeros((nn, 3, 3))
+    bnode = np.zeros((nn, 3, 3))
+    fnode = np.zeros((nn, 3))
+
+    half_mass = 0.5 * sys.mu * sys.l0
+    half_wet = 0.5 * (sys.mu - rho * 0.25 * math.pi * sys.diam ** 2) * g * sys.l0
+    seg_m = half_mass[:, None, None] * _I3 + 0.5 * seg.madd
+    weight = half_wet[:, None] * np.array([0.0, 0.0, 1.0])
+    for e, ends in enumerate((sys.seg_lo, sys.seg_up)):
+        np.add.at(mnode, ends, seg_m)
+        np.add.at(bnode, ends, 0.5 * seg.bmat[:, e])
+        np.add.at(fnode, ends, 0.5 * seg.drag[:, e] - weight)
+
+    # point bodies
+    pb = np.nonzero(sys.pb_mass > 0.0)[0]
+    if pb.size:
+        mnode[pb] += ((sys.pb_mass[pb] + sys.pb_ca[pb] * rho * sys.pb_vol[pb])[:, None, None] * _I3)
+        fnode[pb, 2] -= (sys.pb_mass[pb] - rho * sys.pb_vol[pb]) * g
+        dr = pb[sys.pb_cda[pb] > 0.0]
+        if dr.size:
+            vrel = v[dr] - current_np(r[dr, 2], sys.cur_z, sys.cur_v)
+            vm = np.linalg.norm(vrel, axis=1)
+            kd = 0.5 * rho * sys.pb_cda[dr]
+            fnode[dr] -= (kd * vm)[:, None] * vrel
+            inv_vm = np.where(vm > 1e-12, 1.0 / np.where(vm > 1e-12, vm, 1.0), 0.0)
+            bnode[dr] += (kd * vm)[:, None, None] * _I3 + (kd * inv_vm)[:, None, None] * _outer(vrel, vrel)
+    return mnode, bnode, fnode
+
+
+# ----------------------------------------------------------------------------------------------
+# rigid towed bodies
+# ----------------------------------------------------------------------------------------------
+def _lookup(x, xs, ys):
+    """Piecewise-linear table, end values held (np.interp)."""
+    return float(np.interp(x, xs, ys))
+
+
+def body_params(sys, b):
+    """The packed parameters of rigid body ``b`` as a dict of named quantities (system.BODY_PARAM layout)."""
+    p = sys.bp[b]
+    return dict(mass=p[0], volume=p[1], area=p[2], length=p[3], r_G=p[4:7].copy(), r_B=p[7:10].copy(),
+                I_G=p[10:13].copy(), rot_lin=p[13:16].copy(), rot_quad=p[16:19].copy(), lift_slope=p[19],
+                added_mass=p[20:23].copy(), added_inertia=p[23:26].copy(), r_aft=p[26:29].copy())
+
+
+def body_loads_np(sys, b, lam, vbody, omega, cur_global):
+    """Body-axis force (at the tow point) and moment (about the tow point) on rigid body ``b`` (model.md 3.3).
+
+    * weight m g_b at r_G and buoyancy −ρV g_b at r_B, g_b = Λ (0, 0, −g);
+    * hydrodynamics from the relative velocity of the centroid v_r = v + ω×r_B − Λ V_c, |v_r| = V:
+      incidences θ_v = atan2(−w_r, u_r) (positive when the flow meets the underside) and
+      θ_h = atan2(−v_r, u_r) (positive when the flow meets the starboard side); drag
+      ½ρAV² (C_d,v(θ_v) + C_d,h(θ_h) − C_d,v(0))⁺ along −v_r; lift ½ρAV² C_L(θ_v) ⊥ v_r in x′z′ toward +z′;
+      side force ½ρAV² C_Y(θ_h) ⊥ v_r in x′y′ toward +y′; weathervane moments ½ρAlV² C_m turning the nose
+      toward v_r (+M_y′ for θ_v > 0, −M_z′ for θ_h > 0);
+    * rotational damping −½ρA l² V C_lin ω − ½ρA C_quad l³/32 ω|ω| per axis.
+
+    Returns (f (3,), m (3,), bdiag) with ``bdiag = ½ρAV(2C_d + dC_L/dα)`` the isotropic drag-derivative
+    estimate used for the implicit drag of the tow-point node.
+    """
+    P = body_params(sys, b)
+    rho, g = float(sys.rho), float(sys.g)
+    lam = np.asarray(lam, float)
+    omega = np.asarray(omega, float)
+    g_b = lam @ np.array([0.0, 0.0, -g])
+    f = (P["mass"] - rho * P["volume"]) * g_b
+    m = np.cross(P["r_G"], P["mass"] * g_b) + np.cross(P["r_B"], -rho * P["volume"] * g_b)
+
+    v_r = np.asarray(vbody, float) + np.cross(omega, P["r_B"]) - lam @ np.asarray(cur_global, float)
+    V = float(np.linalg.norm(v_r))
+    qa = 0.5 * rho * P["area"]
+    L = P["length"]
+    bdiag = 0.0
+    if V > 1e-9:
+        u_r, vv_r, w_r = v_r
+        th_v = math.degrees(math.atan2(-w_r, u_r))
+        th_h = math.degrees(math.atan2(-vv_r, u_r))
+        nv, nh = sys.btab_n[b]
+        tab = sys.btab[b]
+        inc_v, inc_h = tab[0, :nv], tab[4, :nh]
+        cd_v, cl_v, cm_v = (_lookup(th_v, inc_v, tab[k, :nv]) for k in (1, 2, 3))
+        cd_h, cy_h, cm_h = (_lookup(th_h, inc_h, tab[k, :nh]) for k in (5, 6, 7))
+        cd = max(cd_v + cd_h - _lookup(0.0, inc_v, tab[1, :nv]), 0.0)
+        q = qa * V * V
+        tv, th = math.radians(th_v), math.radians(th_h)
+        f = f - q * cd * v_r / V
+        f = f + q * cl_v * np.array([math.sin(tv), 0.0, math.cos(tv)])
+        f = f + q * cy_h * np.array([math.sin(th), math.cos(th), 0.0])
+        m = m + q * L * np.array([0.0, cm_v, -cm_h])
+        bdiag = qa * V * (2.0 * cd + P["lift_slope"])
+    m = m - (qa * L * L * V * P["rot_lin"] * omega + qa * P["rot_quad"] * L ** 3 / 32.0 * omega * np.abs(omega))
+    return f, m, bdiag
+
+
+def _skew(a):
+    """S(a) with S(a) b = a × b."""
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def body_mass_blocks_np(sys, b):
+    """(A_tt, A_tr, A_rr) of M_RB + M_A about the tow point (model.md 3.2); A_rt = A_trᵀ.
+
+    M_RB = [[m𝟙, −m S(r_G)], [m S(r_G), I_o]], I_o = I_G + m(|r_G|²𝟙 − r_G r_Gᵀ); diagonal added mass."""
+    P = body_params(sys, b)
+    m, rG = P["mass"], P["r_G"]
+    A_tt = m * _I3 + np.diag(P["added_mass"])
+    A_tr = -m * _skew(rG)
+    I_o = np.diag(P["I_G"]) + m * (rG @ rG * _I3 - np.outer(rG, rG))
+    A_rr = I_o + np.diag(P["added_inertia"])
+    return A_tt, A_tr, A_rr
+
+
+# ----------------------------------------------------------------------------------------------
+# tension system
+# ----------------------------------------------------------------------------------------------
+def constraint_gradient(sys, tang, free_only=True):
+    """C (S × 3N, sparse): row s holds σ_{a,s} t_sᵀ in the columns of each end node a (FREE nodes only)."""
+    ns = sys.l0.shape[0]
+    nn = sys.node_kind.shape[0]
+    rows, cols, vals = [], [], []
+    for ends, sgn in ((sys.seg_lo, 1.0), (sys.seg_up, -1.0)):
+        keep = sys.node_kind[ends] == FREE if free_only else np.ones(ns, bool)
+        s_idx = np.nonzero(keep)[0]
+        for k in range(3):
+            rows.append(s_idx)
+            cols.append(3 * ends[s_idx] + k)
+            vals.append(sgn * tang[s_idx, k])
+    rows, cols, vals = (np.concatenate(x) for x in (rows, cols, vals))
+    return sp.csr_matrix((vals, (rows, cols)), shape=(ns, 3 * nn))
+
+
+def tension_matrix_np(sys, tang, minv, dt):
+    """K = −J (CSR) of the unsquared length constraints g_s = ℓ_s − l_s(1 + T_s/EA_s) (model.md 5.3–5.6).
+
+    From the general rule J[i, s] = −Σ_a σ_{a,i} σ_{a,s} t_i·(½Δt² M̃_a⁻¹ t_s) − δ_is l_i/EA_i over the
+    FREE nodes a shared by segments i and s:  K = ½Δt² C M̃⁻¹ Cᵀ + diag(l/EA), with C from
+    :func:`constraint_gradient` and ``minv`` (N, 3, 3) the inverses of the node matrices M̃ (only FREE
+    nodes are used). The tangents of the rows are the coefficient tangents, so K is exactly symmetric.
+    """
+    nn = sys.node_kind.shape[0]
+    C = constraint_gradient(sys, tang)
+    Minv = sp.block_diag([sp.csr_matrix(minv[a]) for a in range(nn)], format="csr")
+    ea = sys.ea
+    compliance = np.where(np.isinf(ea), 0.0, sys.l0 / np.where(np.isinf(ea), 1.0, ea))
+    K = 0.5 * dt * dt * (C @ Minv @ C.T) + sp.diags(compliance)
+    return sp.csr_matrix(K)
+
+
+def blocks_to_sparse(sys, kd, kb):
+    """The kernel's storage of K (diagonal ``kd``, node blocks ``kb``) as a CSR matrix (for the tests)."""
+    ns = kd.shape[0]
+    rows, cols, vals = list(range(ns)), list(range(ns)), list(kd)
+    for a in range(sys.node_kind.shape[0]):
+        n = sys.node_nseg[a]
+        for k1 in range(n):
+            for k2 in range(n):
+                if k1 != k2 and kb[a, k1, k2] != 0.0:
+                    rows.append(sys.node_segs[a, k1])
+                    cols.append(sys.node_segs[a, k2])
+                    vals.append(kb[a, k1, k2])
+    return sp.csr_matrix((vals, (rows, cols)), shape=(ns, ns))
+
+
+def solve_tension_np(K, rhs):
+    """Solve K x = rhs with a sparse LU (scipy splu)."""
+    return spla.splu(sp.csc_matrix(K)).solve(np.asarray(rhs, float))
+
+
+def thesis_shooting_recursion(E, F, G, rhs):
+    """The thesis's printed sweep (4.38)–(4.40), *as published*. Unstable: do not use (model.md 5.6).
+
+    Solves the tridiagonal system  E_i δT_{i−1} − F_i δT_i + G_i δT_{i+1} = rhs_i  (i = 0 … n−1, segments
+    numbered from the bottom, E_0 and G_{n−1} unused) by shooting from the bottom: δT_i = μ_i δT_0 + η_i with
+    μ_0 = 1, η_0 = 0 and, from row i,
+        μ_{i+1} = (F_i μ_i − E_i μ_{i−1})/G_i,   η_{i+1} = (rhs_i + F_i η_i − E_i η_{i−1})/G_i,
+    then closing at the top row n−1 for δT_0. The homogeneous recurrence has a growing solution ~λ^i
+    (λ + 1/λ = 2 + s), so round-off is amplified by about λ^n; with s = 200 and n = 40 the answer is
+    garbage (relative error > 1e60). Kept only as a regression test of that fact.
+    """
+    E, F, G, rhs = (np.asarray(x, float) for x in (E, F, G, rhs))
+    n = F.shape[0]
+    mu = np.zeros(n)
+    eta = np.zeros(n)
+    mu[0] = 1.0
+    for i in range(n - 1):
+        mu_m = mu[i - 1] if i > 0 else 0.0
+        eta_m = eta[i - 1] if i > 0 else 0.0
+        e = E[i] if i > 0 else 0.0
+        mu[i + 1] = (F[i] * mu[i] - e * mu_m) / G[i]
+        eta[i + 1] = (rhs[i] + F[i] * eta[i] - e * eta_m) / G[i]
+    i = n - 1
+    e = E[i] if n > 1 else 0.0
+    mu_m = mu[i - 1] if n > 1 else 0.0
+    eta_m = eta[i - 1] if n > 1 else 0.0
+    # E δ_{n−2} − F δ_{n−1} = rhs_{n−1}
+    dT0 = (rhs[i] - e * eta_m + F[i] * eta[i]) / (e * mu_m - F[i] * mu[i])
+    return mu * dT0 + eta
+
+
+# ----------------------------------------------------------------------------------------------
+# one Houbolt step
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class TwinStep:
+    """Result of :func:`houbolt_step_np`; also usable as the ``sim_like`` input of the next step."""
+    system: Any
+    settings: Any
+    hist_r: np.ndarray
+    hist_ang: np.ndarray
+    tens_hist: np.ndarray
+    top_react: np.ndarray
+    status: int = OK
+    iterations: int = 0
+    element: int = -1
+    max_dT: float = 0.0
+
+
+def _settings_array(settings):
+    if hasattr(settings, "array"):
+        settings = settings.array()
+    return np.asarray(settings, float)
+
+
+def place_aft_nodes_np(sys, r, angs):
+    """Aft tow points ride on their body: r_aft = r_tp + Λ_fᵀ r_t (model.md 3.5). Returns a new array."""
+    r = np.array(r, float)
+    for b in range(sys.body_node.shape[0]):
+        c = sys.body_aft_node[b]
+        if c >= 0:
+            lam = rotation_matrix_np(*angs[b])
+            r[c] = r[sys.body_node[b]] + lam.T @ sys.bp[b, 26:29]
+    return r
+
+
+def tension_force_np(sys, tang, tens):
+    """Σ_s σ_{a,s} T_s t_s on every node (N, 3)."""
+    f = np.zeros((sys.node_kind.shape[0], 3))
+    Tt = tens[:, None] * tang
+    np.add.at(f, sys.seg_lo, Tt)
+    np.add.at(f, sys.seg_up, -Tt)
+    return f
+
+
+def houbolt_acc(r_new, hist_r, dt):
+    """R̈^{t+1} = (2R^{t+1} − 5R^t + 4R^{t−1} − R^{t−2})/Δt² (5.16)."""
+    return (2.0 * r_new - 5.0 * hist_r[0] + 4.0 * hist_r[1] - hist_r[2]) / (dt * dt)
+
+
+def houbolt_vel(r_new, hist, dt):
+    """Ṙ^{t+1} = (11R^{t+1} − 18R^t + 9R^{t−1} − 2R^{t−2})/(6Δt) (4.9)."""
+    return (11.0 * r_new - 18.0 * hist[0] + 9.0 * hist[1] - 2.0 * hist[2]) / (6.0 * dt)
+
+
+def node_reaction_np(sys, c, r_new, hist_r, dt, tang, tens, mnode, fnode):
+    """Force of the cable system on the support of prescribed node c: Σσ T t + F_o − M r̈ (model.md 2.6)."""
+    f = fnode[c].copy()
+    for k in range(sys.node_nseg[c]):
+        s = sys.node_segs[c, k]
+        f += sys.node_sgn[c, k] * tens[s] * tang[s]
+    return f - mnode[c] @ houbolt_acc(r_new[c], hist_r[:, c], dt)
+
+
+def geometric_stiffness_np(sys, seg: SegmentLoads, tens):
+    """Node string stiffness K_g,a = Σ_{s at a} (T_s/ℓ_s)(𝟙 − t_s t_sᵀ) (N, 3, 3); segments with ℓ = 0 omitted."""
+    nn = sys.node_kind.shape[0]
+    ell = seg.stretched
+    k = np.where(ell > 0.0, tens / np.where(ell > 0.0, ell, 1.0), 0.0)
+    kg_seg = k[:, None, None] * (_I3 - _outer(seg.tang, seg.tang))
+    kg = np.zeros((nn, 3, 3))
+    np.add.at(kg, sys.seg_lo, kg_seg)
+    np.add.at(kg, sys.seg_up, kg_seg)
+    return kg
+
+
+def rotational_stiffness_np(sys, b, ang, v_node, omega, cur_global, m0, eps_angle=1e-5, eps_rate=1e-4):
+    """Diagonal estimates k_i = max(−∂M_i/∂θ_i, 0) and c_i = max(−∂M_i/∂ω_i, 0) of the body-load moments
+    (forward differences about the moment ``m0`` at (θ, ω)); returns [k_β, k_α, k_γ, c_p, c_q, c_r].
+    The Euler angle θ_i is perturbed with the tow-point velocity ``v_node`` held in global axes."""
+    out = np.zeros(6)
+    lam0 = rotation_matrix_np(*ang)
+    for i in range(3):
+        ang2 = np.array(ang, float)
+        ang2[i] += eps_angle
+        lam2 = rotation_matrix_np(*ang2)
+        _, m, _ = body_loads_np(sys, b, lam2, lam2 @ v_node, omega, cur_global)
+        out[i] = max(-(m[i] - m0[i]) / eps_angle, 0.0)
+        w2 = np.array(omega, float)
+        w2[i] += eps_rate
+        _, m, _ = body_loads_np(sys, b, lam0, lam0 @ v_node, w2, cur_global)
+        out[3 + i] = max(-(m[i] - m0[i]) / eps_rate, 0.0)
+    return out
+
+
+def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
+    """Twin of ``kernels.houbolt_step``: one Houbolt step (model.md 5.1–5.2) on copies of the state.
+
+    ``sim_like`` provides ``system``, ``settings`` (SolverSettings or its ``array()``), ``hist_r`` (3, N, 3),
+    ``hist_ang`` (3, B, 3) and ``tens_hist`` (2, S) — a :class:`~towenv.core.simulator.Simulator` or a
+    previous :class:`TwinStep`. Nothing of it is modified. The step starts from the predictor
+    R* = 3R^t − 3R^{t−1} + R^{t−2} (tow point prescribed) and the tension guess max(2T^t − T^{t−1}, 0).
+    Per iteration:
+
+    1. coefficients at the iterate r*: Houbolt velocities, segment and node loads, body loads with the
+       tail-cable reaction, Coriolis/centripetal terms, and the condensation of each rigid body onto its
+       tow-point node: A_eff = A_tt − A_tr A_rr⁻¹ A_rt, f_eff = F − A_tr A_rr⁻¹ M, added as Λᵀ A_eff Λ and
+       Λᵀ f_eff (model.md 3.4);
+    2. the linearisation L = (11Δt/12) B + ½Δt² K_g (implicit drag, 5.2, plus the node's own string
+       stiffness K_g, :func:`geometric_stiffness_np`), M̃ = M + L, and the node-local affine map
+       r_a(T) = M̃⁻¹[M (2.5r^t − 2r^{t−1} + 0.5r^{t−2}) + L r* + ½Δt² (F_o + Σ σ T t)];
+    3. residuals g = ℓ − l(1 + T/EA) at r(T), the tension matrix K = −J (coefficient tangents), slack
+       segments (T ≤ 0 and g < 0) held at T = 0 by identity rows, K δT = g, T ← max(T + δT, 0) (5.3–5.6, 9);
+    4. positions at the new tensions; body angular accelerations ω̇ = A_rr⁻¹(M − A_rt Λ r̈) mapped to Euler
+       accelerations, Houbolt (4.10) on the Euler angles, the update relaxed by the diagonal factor
+       1 + (½Δt² k_θ + (11Δt/12) c_ω)/A_rr,ii (:func:`rotational_stiffness_np`, evaluated at the first
+       iterate); aft nodes re-placed;
+    5. converged when max|δT| ≤ tol_abs + tol_rel·max(T) and max|Δangle| ≤ angle_tol.
+    Then the strain and finiteness checks, the vessel reaction and the history shift.
+
+    The linearisations in 2 and the relaxation in 4 change the convergence rate only, not the converged
+    solution; they are reproduced here so that the iterates match the kernel's.
+
+    If ``trace`` is a list, a dict of the iterate (positions, tensions, angles, max|δT|) is appended to it
+    after every iteration (for debugging).
+    """
+    sys = sim_like.system
+    settings = _settings_array(sim_like.settings)
+    tol_abs, tol_rel, maxit, max_strain, ang_tol = (settings[0], settings[1], int(settings[2]), settings[3],
+                                                    settings[4])
+    hist_r = np.array(sim_like.hist_r, float)
+    hist_ang = np.array(sim_like.hist_ang, float)
+    tens_hist = np.array(sim_like.tens_hist, float)
+    old_react = np.array(getattr(sim_like, "top_react", np.zeros(3)), float)
+
+    def fail(status, it, elem, maxd):
+        return TwinStep(sys, sim_like.settings, hist_r, hist_ang, tens_hist, old_react, status, it, elem, maxd)
+
+    nb = sys.body_node.shape[0]
+    top = sys.top_node
+    free = sys.node_kind == FREE
+    c11 = 11.0 * dt / 12.0
+    hdt2 = 0.5 * dt * dt
+    r_hist_term = 2.5 * hist_r[0] - 2.0 * hist_r[1] + 0.5 * hist_r[2]
+    a_hist_term = 2.5 * hist_ang[0] - 2.0 * hist_ang[1] + 0.5 * hist_ang[2]
+
+    # predictor
+    rs = 3.0 * hist_r[0] - 3.0 * hist_r[1] + hist_r[2]
+    rs[top] = r_top_new
+    angs = 3.0 * hist_ang[0] - 3.0 * hist_ang[1] + hist_ang[2]
+    rs = place_aft_nodes_np(sys, rs, angs)
+    tens = np.maximum(2.0 * tens_hist[0] - tens_hist[1], 0.0)     # linear extrapolation, T ≥ 0
+    ea = sys.ea
+    compliance = np.where(np.isinf(ea), 0.0, sys.l0 / np.where(np.isinf(ea), 1.0, ea))
+
+    relax = np.zeros((nb, 6))       # per body: rotational stiffness k_θ (3) and damping c_ω (3)
+    status = FAIL_NEWTON
+    it = 0
+    maxd = 0.0
+    elem = -1
+    for it in range(1, maxit + 1):
+        # 1. coefficients
+        vs = houbolt_vel(rs, hist_r, dt)
+        seg = segment_loads_np(sys, rs, vs)
+        mnode, bnode, fnode = node_assembly_np(sys, rs, vs, seg)
+        body = []
+        for b in range(nb):
+            a = sys.body_node[b]
+            P = body_params(sys, b)
+            dang = houbolt_vel(angs[b], hist_ang[:, b], dt)
+            lam = rotation_matrix_np(*angs[b])
+            w = euler_rates_to_omega_np(angs[b], dang)
+            z_centroid = rs[a, 2] + (lam.T @ P["r_B"])[2]
+            cur = current_np(z_centroid, sys.cur_z, sys.cur_v)
+            F, M, bd = body_loads_np(sys, b, lam, lam @ vs[a], w, cur)
+            if it == 1:
+                relax[b] = rotational_stiffness_np(sys, b, angs[b], vs[a], w, cur, M)
+            c = sys.body_aft_node[b]
+            if c >= 0:
+                tail = lam @ node_reaction_np(sys, c, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
+                F = F + tail
+                M = M + np.cross(P["r_aft"], tail)
+            A_tt, A_tr, A_rr = body_mass_blocks_np(sys, b)
+            I_o = A_rr - np.diag(P["added_inertia"])
+            F = F - P["mass"] * np.cross(w, np.cross(w, P["r_G"]))
+            M = M - np.cross(w, I_o @ w)
+            X = np.linalg.solve(A_rr, A_tr.T)
+            y = np.linalg.solve(A_rr, M)
+            A_eff = A_tt - A_tr @ X
+            f_eff = F - A_tr @ y
+            mnode[a] += lam.T @ A_eff @ lam
+            fnode[a] += lam.T @ f_eff
+            bnode[a] += bd * _I3
+            body.append((lam, dang, w, X, y, np.diag(A_rr).copy()))
+        # 2. node-local affine map r(T)
+        lin = c11 * bnode + hdt2 * geometric_stiffness_np(sys, seg, tens)
+        Mt = mnode + lin
+        minv = np.zeros_like(Mt)
+        minv[free] = np.linalg.inv(Mt[free])
+        rhs_node = (np.einsum("aij,aj->ai", mnode, r_hist_term) + np.einsum("aij,aj->ai", lin, rs)
+                    + hdt2 * fnode)
+        acon = np.einsum("aij,aj->ai", minv, rhs_node)
+
+        def positions(T):
+            out = rs.copy()
+            x = acon + hdt2 * np.einsum("aij,aj->ai", minv, tension_force_np(sys, seg.tang, T))
+            out[free] = x[free]
+            return out
+
+        rs = place_aft_nodes_np(sys, positions(tens), angs)
+        # 3. residuals and Newton update
+        ell = np.linalg.norm(rs[sys.seg_up] - rs[sys.seg_lo], axis=1)
+        gres = ell - sys.l0 - compliance * tens
+        tmax = max(float(tens.max(initial=0.0)), 0.0)
+        K = tension_matrix_np(sys, seg.tang, minv, dt)
+        slack = (tens <= 0.0) & (gres < 0.0)
+        keep = sp.diags((~slack).astype(float))
+        K = keep @ K @ keep + sp.diags(slack.astype(float))
+        rhs = np.where(slack, -tens, gres)
+        try:
+            dT = solve_tension_np(K, rhs)
+        except RuntimeError:                      # singular factor
+            return fail(FAIL_NEWTON, it, -1, 0.0)
+        new = np.maximum(tens + dT, 0.0)
+        change = np.abs(new - tens)
+        if not np.all(np.isfinite(change)):
+            bad = np.nonzero(~np.isfinite(change))[0]
+            return fail(FAIL_NAN, it, int(bad[0]), float("nan"))
+        elem = int(np.argmax(change))
+        maxd = float(change[elem])
+        tens = new
+        rs = positions(tens)
+        # 4. body rotations
+        dang_max = 0.0
+        new_angs = angs.copy()
+        for b in range(nb):
+            a = sys.body_node[b]
+            lam, dang, w, X, y, arr_diag = body[b]
+            a_body = lam @ houbolt_acc(rs[a], hist_r[:, a], dt)
+            domega = y - X @ a_body
+            eacc = omega_dot_to_euler_acc_np(angs[b], dang, w, domega)
+            plain = a_hist_term[b] + hdt2 * eacc
+            # relaxed fixed-point update (diagonal implicit rotational stiffness and damping)
+            factor = 1.0 + (hdt2 * relax[b, :3] + c11 * relax[b, 3:]) / arr_diag
+            new_angs[b] = angs[b] + (plain - angs[b]) / factor
+            dang_max = max(dang_max, float(np.max(np.abs(new_angs[b] - angs[b]))))
+            if abs(new_angs[b, 1]) > 1.48:
+                return fail(FAIL_ANGLE, it, b, maxd)
+        if not math.isfinite(dang_max):
+            return fail(FAIL_NAN, it, -1, maxd)
+        angs = new_angs
+        rs = place_aft_nodes_np(sys, rs, angs)
+        if trace is not None:
+            trace.append(dict(r=rs.copy(), tens=tens.copy(), angs=angs.copy(), max_dT=maxd, dang_max=dang_max))
+        # 5. convergence
+        if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
+            status = OK
+            break
+    if status != OK:
+        return fail(status, it, elem, maxd)
+    strain = np.where(np.isinf(ea), 0.0, tens / np.where(np.isinf(ea), 1.0, ea))
+    over = np.nonzero(strain > max_strain)[0]
+    if over.size:
+        return fail(FAIL_STRETCH, it, int(over[0]), maxd)
+    if not np.all(np.isfinite(rs)):
+        return fail(FAIL_NAN, it, int(np.nonzero(~np.all(np.isfinite(rs), axis=1))[0][0]), maxd)
+    top_react = node_reaction_np(sys, top, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
+    new_hist_r = np.stack([rs, hist_r[0], hist_r[1]])
+    new_hist_ang = np.stack([angs, hist_ang[0], hist_ang[1]])
+    new_tens = np.stack([tens, tens_hist[0]])
+    return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd)

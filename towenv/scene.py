@@ -1,0 +1,1444 @@
+"""Scene description: validated, immutable data for a towed system (``docs/scene-format.md``).
+
+A scene is a TOML file, a plain dict, or the name of a scene shipped in ``towenv/scenes/``::
+
+    >>> from towenv.scene import load_scene, list_scenes
+    >>> sc = load_scene("two_part_tow_1")            # embedded scene (the project default)
+    >>> sc.line("primary").length
+    85.0
+    >>> sc.span_segments("primary")                  # segments per span, top end first
+    [6, 2]
+    >>> fast = sc.with_overrides({"vessel.speed": 4.0, "solver.dt": 0.01})
+
+Every validation problem raises one :class:`SceneError` (a ``ValueError``) whose message lists each
+offending field by its dotted path, what is allowed and the value given, e.g.
+``lines[0].length: must be > 0 m (got -5.0)``. No pydantic or numpy exception escapes
+:func:`load_scene`.
+
+All models are frozen; derive variants with :meth:`Scene.with_overrides`.
+"""
+import csv
+import copy
+import math
+import re
+import tomllib
+from collections.abc import Mapping
+from os import PathLike
+from pathlib import Path
+from typing import Annotated, Any, Literal, NamedTuple, Union
+
+from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationError,
+                      ValidationInfo, model_validator)
+from pydantic.functional_serializers import PlainSerializer
+from pydantic.functional_validators import PlainValidator
+from pydantic_core import PydanticCustomError
+
+__all__ = [
+    "SceneError", "Scene", "Water", "Current", "Vessel", "TurnManoeuvre", "SpeedChangeManoeuvre",
+    "SinusoidExcitation", "TimeSeriesExcitation", "Ramp", "Line", "JunctionAttachment", "BodyAttachment",
+    "PointBody", "RigidBody", "CoefficientTable", "Solver", "ManoeuvreWindow",
+    "load_scene", "list_scenes", "scene_path", "DEFAULT_SCENE", "SCENES_DIR", "SCENE_DATA_DIR",
+    "MAX_SEGMENTS",
+]
+
+SCENES_DIR = Path(__file__).resolve().parent / "scenes"
+SCENE_DATA_DIR = SCENES_DIR / "data"
+DEFAULT_SCENE = "two_part_tow_1"
+MAX_SEGMENTS = 1_000_000          # sanity limit on the segment count of one line
+_INTERNAL = "internal error while validating the scene"
+
+
+# =====================================================================================================
+# Error type and formatting
+# =====================================================================================================
+class SceneError(ValueError):
+    """Invalid scene. ``problems`` is a list of ``(dotted_path, message)``; ``str(err)`` lists them all."""
+
+    def __init__(self, problems, source: str | None = None):
+        if isinstance(problems, str):
+            problems = [("", problems)]
+        self.problems: list[tuple[str, str]] = list(problems)
+        self.source = source
+        lines = [f"{p}: {m}" if p else m for p, m in self.problems]
+        prefix = f"{source}: " if source else ""
+        if len(lines) == 1:
+            msg = prefix + lines[0]
+        else:
+            msg = f"{prefix}{len(lines)} problems in scene:\n" + "\n".join("  " + x for x in lines)
+        super().__init__(msg)
+
+    @classmethod
+    def from_validation_error(cls, err: ValidationError, source: str | None = None) -> "SceneError":
+        problems: list[tuple[str, str]] = []
+        errors = err.errors(include_url=False)
+        locs = [tuple(e.get("loc", ())) for e in errors]
+        for e in errors:
+            loc = tuple(e.get("loc", ()))
+            if e.get("type") == "too_short" and any(len(o) > len(loc) and o[:len(loc)] == loc for o in locs):
+                continue                   # "0 items after validation": its items already reported
+            for item in _convert_error(e):
+                if item not in problems:
+                    problems.append(item)
+        if not problems:
+            problems = [("", "invalid scene")]
+        return cls(problems, source)
+
+
+def _short(v: Any, limit: int = 80) -> str:
+    try:
+        if isinstance(v, float):
+            s = repr(v)
+        elif isinstance(v, (list, tuple)):
+            s = "[" + ", ".join(_short(x, 20) for x in v[:8]) + (", ..." if len(v) > 8 else "") + "]"
+        else:
+            s = repr(v)
+    except Exception:  # pragma: no cover - exotic objects with broken repr
+        s = f"<{type(v).__name__}>"
+    return s if len(s) <= limit else s[: limit - 3] + "..."
+
+
+def _join(base: str, part: Any) -> str:
+    if isinstance(part, int) and not isinstance(part, bool):
+        return f"{base}[{part}]"
+    part = str(part)
+    if not part:
+        return base
+    if part.startswith("["):
+        return base + part
+    return f"{base}.{part}" if base else part
+
+
+def _loc_path(loc) -> str:
+    path = ""
+    for p in loc:
+        if isinstance(p, str) and p.startswith("@"):
+            continue                       # discriminated-union tag, not a field
+        path = _join(path, p)
+    return path
+
+
+# union error type -> (key naming the variant, allowed values)
+_UNION_ERRORS = {
+    "bad_manoeuvre": ("type", ("turn", "speed_change")),
+    "bad_excitation": ("type", ("sinusoid", "time_series")),
+    "bad_body": ("kind", ("fish", "depressor", "ball", "clump")),
+}
+
+
+def _convert_error(e: dict) -> list[tuple[str, str]]:
+    loc = tuple(e.get("loc", ()))
+    typ = e.get("type", "")
+    ctx = e.get("ctx") or {}
+    inp = e.get("input")
+    path = _loc_path(loc)
+    got = f" (got {_short(inp)})"
+    if typ == "scene_problems":
+        return [(_join(path, sub) if sub else path, msg) for sub, msg in ctx.get("problems", [])]
+    if typ == "scene_value":
+        return [(path, str(ctx.get("msg", "invalid value")) + got)]
+    if typ in _UNION_ERRORS:
+        key, allowed = _UNION_ERRORS[typ]
+        choices = " or ".join(f'"{a}"' for a in allowed)
+        if isinstance(inp, Mapping):
+            if key in inp:
+                return [(_join(path, key), f"must be {choices} (got {_short(inp[key])})")]
+            return [(_join(path, key), f"required field missing; must be {choices}")]
+        return [(path, f'must be a table with {key} = {choices}{got}')]
+    if typ == "bad_top":
+        return [(path, 'must be "vessel", {line = "<name>", distance = <m>} or {body = "<name>"}' + got)]
+    if typ == "bad_bottom":
+        return [(path, 'must be "free" or {body = "<name>"}' + got)]
+    if typ == "missing":
+        return [(path, "required field missing")]
+    if typ == "extra_forbidden":
+        allowed = _allowed_fields(loc[:-1])
+        hint = f" (allowed: {', '.join(allowed)})" if allowed else ""
+        return [(path, f"unknown field{hint}")]
+    if typ in ("model_type", "model_attributes_type", "dict_type"):
+        return [(path, "must be a table" + got)]
+    if typ in ("tuple_type", "list_type", "iterable_type"):
+        return [(path, "must be a list" + got)]
+    if typ == "too_short":
+        n = ctx.get("min_length", 1)
+        return [(path, f"must have at least {n} entr{'y' if n == 1 else 'ies'}" + got)]
+    if typ == "string_type":
+        return [(path, "must be a string" + got)]
+    msg = str(e.get("msg", "invalid value"))
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if msg.startswith("Input should be "):
+        msg = "must be " + msg[len("Input should be "):]
+    return [(path, msg + got)]
+
+
+def _model_classes(ann) -> list[type]:
+    """BaseModel subclasses mentioned in a type annotation."""
+    out: list[type] = []
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return [ann]
+    for a in getattr(ann, "__args__", ()) or ():
+        out += _model_classes(a)
+    origin = getattr(ann, "__origin__", None)
+    if origin is not None and origin is not ann:
+        out += [c for c in _model_classes(origin) if c not in out]
+    return out
+
+
+def _allowed_fields(loc) -> list[str]:
+    """Field names of the model at ``loc`` (used to list allowed names for an unknown field)."""
+    try:
+        cls: type | None = Scene
+        for p in loc:
+            if isinstance(p, int):
+                continue
+            if isinstance(p, str) and p.startswith("@"):
+                cls = _TAG_CLASSES.get(p)
+                continue
+            if cls is None or p not in cls.model_fields:
+                return []
+            cands = _model_classes(cls.model_fields[p].annotation)
+            cls = cands[0] if len(cands) == 1 else None
+        return list(cls.model_fields) if cls is not None else []
+    except Exception:  # pragma: no cover - defensive: never fail while reporting an error
+        return []
+
+
+def _problems(*items: tuple[str, str]):
+    """Raise a validation error carrying several ``(sub_path, message)`` problems."""
+    items = [(str(p), str(m)) for p, m in items]
+    raise PydanticCustomError("scene_problems", "{summary}",
+                              {"summary": "; ".join(f"{p}: {m}" for p, m in items), "problems": items})
+
+
+def _value_error(msg: str):
+    raise PydanticCustomError("scene_value", "{msg}", {"msg": msg})
+
+
+# =====================================================================================================
+# Constrained value types (all reject bool, strings, NaN and infinity)
+# =====================================================================================================
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def _range_text(gt=None, ge=None, lt=None, le=None, unit="") -> str:
+    lo = gt if gt is not None else ge
+    hi = lt if lt is not None else le
+    if lo is not None and hi is not None:
+        s = f"in {'(' if gt is not None else '['}{_fmt(lo)}, {_fmt(hi)}{')' if lt is not None else ']'}"
+    elif lo is not None:
+        s = f"{'>' if gt is not None else '>='} {_fmt(lo)}"
+    elif hi is not None:
+        s = f"{'<' if lt is not None else '<='} {_fmt(hi)}"
+    else:
+        s = ""
+    if unit:
+        s = f"{s} {unit}" if s else f"in {unit}"
+    return s
+
+
+def _is_number(v) -> bool:
+    if isinstance(v, bool):
+        return False
+    if isinstance(v, (int, float)):
+        return True
+    try:                                   # numpy scalars, without importing numpy here
+        import numbers
+        return isinstance(v, numbers.Real) and not isinstance(v, bool)
+    except Exception:  # pragma: no cover
+        return False
+
+
+def _to_float(v, what: str) -> float:
+    if not _is_number(v):
+        _value_error(f"must be a number{(' ' + what) if what else ''}")
+    try:
+        f = float(v)
+    except (OverflowError, ValueError, TypeError):
+        _value_error(f"must be a finite number{(' ' + what) if what else ''}")
+    if not math.isfinite(f):
+        _value_error(f"must be a finite number{(' ' + what) if what else ''}")
+    return f
+
+
+def _in_range(f, gt, ge, lt, le) -> bool:
+    return not ((gt is not None and not f > gt) or (ge is not None and not f >= ge)
+                or (lt is not None and not f < lt) or (le is not None and not f <= le))
+
+
+def Num(*, gt=None, ge=None, lt=None, le=None, unit="", nonzero=False):
+    """A finite float with optional bounds; the error message states the allowed range and unit."""
+    rng = _range_text(gt, ge, lt, le, unit)
+
+    def validate(v):
+        f = _to_float(v, rng)
+        if not _in_range(f, gt, ge, lt, le):
+            _value_error(f"must be {rng}")
+        if nonzero and f == 0.0:
+            _value_error(f"must be non-zero{(' ' + unit) if unit else ''}")
+        return f
+
+    return Annotated[float, PlainValidator(validate)]
+
+
+def Int(*, ge=None, le=None):
+    rng = _range_text(ge=ge, le=le)
+
+    def validate(v):
+        if isinstance(v, bool) or not _is_number(v):
+            _value_error(f"must be an integer {rng}".rstrip())
+        if isinstance(v, int):
+            i = v
+        else:
+            try:
+                f = float(v)
+            except (OverflowError, ValueError, TypeError):
+                _value_error(f"must be an integer {rng}".rstrip())
+            if not math.isfinite(f) or f != int(f) or type(v).__name__.startswith("float"):
+                _value_error(f"must be an integer {rng}".rstrip())
+            i = int(f)
+        if (ge is not None and i < ge) or (le is not None and i > le):
+            _value_error(f"must be an integer {rng}".rstrip())
+        return int(i)
+
+    return Annotated[int, PlainValidator(validate)]
+
+
+def Vec3(*, gt=None, ge=None, lt=None, le=None, abs_le=None, unit="m"):
+    """Three finite floats ``[x, y, z]`` (stored as a tuple)."""
+    if abs_le is not None:
+        rng = f"with |component| <= {_fmt(abs_le)}{(' ' + unit) if unit else ''}"
+    else:
+        r = _range_text(gt, ge, lt, le, "")
+        rng = (f"each {r}" if r else "") + (f" ({unit})" if unit else "")
+    what = f"must be a list of 3 numbers [x, y, z]{(' ' + rng) if rng else ''}"
+
+    def validate(v):
+        if isinstance(v, (str, bytes, Mapping)) or not hasattr(v, "__len__") or not hasattr(v, "__iter__"):
+            _value_error(what)
+        try:
+            items = list(v)
+        except Exception:
+            _value_error(what)
+        if len(items) != 3 or not all(_is_number(x) for x in items):
+            _value_error(what)
+        out = []
+        for x in items:
+            try:
+                f = float(x)
+            except (OverflowError, ValueError, TypeError):
+                _value_error(what)
+            if not math.isfinite(f):
+                _value_error(what)
+            if abs_le is not None and abs(f) > abs_le:
+                _value_error(what)
+            if not _in_range(f, gt, ge, lt, le):
+                _value_error(what)
+            out.append(f)
+        return tuple(out)
+
+    return Annotated[tuple[float, float, float], PlainValidator(validate),
+                     PlainSerializer(lambda v: [float(x) for x in v], return_type=list)]
+
+
+def _validate_name(v):
+    if not isinstance(v, str) or not v.strip():
+        _value_error("must be a non-empty string")
+    return v
+
+
+def _validate_text(v):
+    if not isinstance(v, str):
+        _value_error("must be a string")
+    return v
+
+
+Name = Annotated[str, PlainValidator(_validate_name)]
+Text = Annotated[str, PlainValidator(_validate_text)]
+
+
+def _choice(*allowed: str):
+    txt = " or ".join(f'"{a}"' for a in allowed)
+
+    def validate(v):
+        if not isinstance(v, str) or v not in allowed:
+            _value_error(f"must be {txt}")
+        return v
+
+    return Annotated[str, PlainValidator(validate)]
+
+
+def _validate_segments(v):
+    msg = f"must be an integer in [1, {MAX_SEGMENTS}] or a list of such integers, one per span (top end first)"
+
+    def one(x):
+        if isinstance(x, bool) or not isinstance(x, int):
+            try:
+                import numbers
+                if isinstance(x, numbers.Integral) and not isinstance(x, bool):
+                    x = int(x)
+                else:
+                    _value_error(msg)
+            except PydanticCustomError:
+                raise
+            except Exception:  # pragma: no cover
+                _value_error(msg)
+        if not 1 <= x <= MAX_SEGMENTS:
+            _value_error(msg)
+        return int(x)
+
+    if isinstance(v, (list, tuple)):
+        if not v:
+            _value_error(msg)
+        out = tuple(one(x) for x in v)
+        if sum(out) > MAX_SEGMENTS:
+            _value_error(msg)
+        return out
+    return one(v)
+
+
+Segments = Annotated[Union[int, tuple[int, ...]], PlainValidator(_validate_segments),
+                     PlainSerializer(lambda v: list(v) if isinstance(v, tuple) else v, return_type=Any)]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, validate_default=False)
+
+
+# =====================================================================================================
+# Environment
+# =====================================================================================================
+class Water(_Model):
+    """Water density and gravity."""
+    density: Num(ge=500, le=2000, unit="kg/m^3") = 1025.0
+    gravity: Num(gt=0, le=20, unit="m/s^2") = 9.80665
+
+
+Depth = Num(ge=0, unit="m")
+CurrentVec = Vec3(abs_le=10, unit="m/s")
+
+
+class Current(_Model):
+    """Uniform current ``velocity`` or a depth profile (``depths`` + ``velocities``); default none."""
+    velocity: CurrentVec | None = None
+    depths: tuple[Depth, ...] | None = None
+    velocities: tuple[CurrentVec, ...] | None = None
+
+    @model_validator(mode="after")
+    def _check(self):
+        probs = []
+        has_profile = self.depths is not None or self.velocities is not None
+        if self.velocity is not None and has_profile:
+            probs.append(("velocity", "give either a uniform velocity or a depth profile "
+                                      "(depths + velocities), not both"))
+        if has_profile:
+            if self.depths is None:
+                probs.append(("depths", "required with velocities (depths in m, >= 0, strictly increasing)"))
+            elif self.velocities is None:
+                probs.append(("velocities", "required with depths (one [u, v, w] per depth)"))
+            else:
+                if len(self.depths) == 0:
+                    probs.append(("depths", "must have at least 1 entry"))
+                if len(self.depths) != len(self.velocities):
+                    probs.append(("velocities", f"must have one [u, v, w] per depth: {len(self.depths)} depths "
+                                                f"(got {len(self.velocities)} velocities)"))
+                for i in range(1, len(self.depths)):
+                    if not self.depths[i] > self.depths[i - 1]:
+                        probs.append((f"depths[{i}]", f"must be strictly increasing: > {self.depths[i - 1]!r} m "
+                                                      f"(got {self.depths[i]!r})"))
+                        break
+        if probs:
+            _problems(*probs)
+        return self
+
+    @property
+    def is_uniform(self) -> bool:
+        return self.depths is None
+
+    def velocity_at(self, z: float) -> tuple[float, float, float]:
+        """Current at height ``z`` (depth ``-z``): linear in depth, held beyond the ends."""
+        if self.depths is None:
+            return self.velocity or (0.0, 0.0, 0.0)
+        d = max(-float(z), 0.0)
+        ds, vs = self.depths, self.velocities
+        if d <= ds[0]:
+            return vs[0]
+        if d >= ds[-1]:
+            return vs[-1]
+        for i in range(1, len(ds)):
+            if d <= ds[i]:
+                w = (d - ds[i - 1]) / (ds[i] - ds[i - 1])
+                return tuple(a + w * (b - a) for a, b in zip(vs[i - 1], vs[i]))
+        return vs[-1]  # pragma: no cover
+
+
+# =====================================================================================================
+# Vessel: manoeuvres, excitation, ramp
+# =====================================================================================================
+Speed = Num(ge=0, le=30, unit="m/s")
+
+
+class TurnManoeuvre(_Model):
+    """Constant-radius turn at constant speed; positive ``angle_deg`` turns to port."""
+    type: Literal["turn"]
+    start_time: Num(ge=0, unit="s")
+    radius: Num(gt=0, unit="m")
+    angle_deg: Num(unit="deg", nonzero=True)
+    speed: Num(gt=0, le=30, unit="m/s") | None = None
+
+
+class SpeedChangeManoeuvre(_Model):
+    """Linear change of speed over ``duration``."""
+    type: Literal["speed_change"]
+    start_time: Num(ge=0, unit="s")
+    duration: Num(gt=0, unit="s")
+    final_speed: Speed
+
+
+class SinusoidExcitation(_Model):
+    """Tow-point displacement ``amplitude * sin(2 pi t / period + phase)`` along a global axis."""
+    type: Literal["sinusoid"]
+    axis: _choice("x", "y", "z")
+    amplitude: Num(ge=0, unit="m")
+    period: Num(gt=0, unit="s")
+    phase_deg: Num(unit="deg") = 0.0
+
+
+def _read_time_series(path: Path):
+    """Read and check a ``t,x,y,z`` CSV; returns (t list, xyz list). Raises ValueError with a message."""
+    if not path.is_file():
+        raise ValueError(f"file not found: {path}")
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = list(csv.reader(fh))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise ValueError(f"cannot read {path}: {exc}") from None
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if not rows:
+        raise ValueError(f"{path} is empty; expected a header t,x,y,z and at least 2 rows")
+    header = [c.strip().lower() for c in rows[0]]
+    if header != ["t", "x", "y", "z"]:
+        raise ValueError(f"{path}: header must be t,x,y,z (got {','.join(rows[0])})")
+    data = rows[1:]
+    if len(data) < 2:
+        raise ValueError(f"{path}: needs at least 2 data rows (got {len(data)})")
+    ts, xyz = [], []
+    for k, r in enumerate(data, start=2):
+        if len(r) != 4:
+            raise ValueError(f"{path} line {k}: expected 4 values t,x,y,z (got {len(r)})")
+        try:
+            vals = [float(c) for c in r]
+        except ValueError:
+            raise ValueError(f"{path} line {k}: values must be numbers (got {','.join(r)})") from None
+        if not all(math.isfinite(x) for x in vals):
+            raise ValueError(f"{path} line {k}: values must be finite (got {','.join(r)})")
+        if ts and not vals[0] > ts[-1]:
+            raise ValueError(f"{path} line {k}: t must be strictly increasing (got {vals[0]!r} after {ts[-1]!r})")
+        ts.append(vals[0])
+        xyz.append(tuple(vals[1:]))
+    return ts, xyz
+
+
+def _resolve(file: str, base_dir) -> Path:
+    p = Path(file).expanduser()
+    if not p.is_absolute():
+        p = Path(base_dir if base_dir is not None else Path.cwd()) / p
+    return p
+
+
+class TimeSeriesExcitation(_Model):
+    """Tow-point offsets from a CSV ``t,x,y,z`` (linear interpolation, held at the last value).
+
+    Relative ``file`` paths resolve against the scene file's folder (``SCENE_DATA_DIR`` for embedded
+    scenes, the working directory for dicts unless ``load_scene(..., base_dir=...)`` is given)."""
+    type: Literal["time_series"]
+    file: Name
+
+    @model_validator(mode="after")
+    def _check_file(self, info: ValidationInfo):
+        base = (info.context or {}).get("base_dir") if info is not None else None
+        path = _resolve(self.file, base)
+        try:
+            _read_time_series(path)
+        except ValueError as exc:
+            _problems(("file", f"{exc} (got {self.file!r})"))
+        return self
+
+    def resolve(self, base_dir=None) -> Path:
+        """Absolute path of the CSV (relative paths against ``base_dir``, default the working dir)."""
+        return _resolve(self.file, base_dir)
+
+    def load(self, base_dir=None):
+        """``(t, xyz)`` as lists (times in s, offsets in m)."""
+        return _read_time_series(self.resolve(base_dir))
+
+
+class Ramp(_Model):
+    """Start-up ramp of the oscillatory excitation only."""
+    type: _choice("half_cosine", "exponential", "none") = "half_cosine"
+    duration: Num(ge=0, unit="s") = 12.0
+
+    def __call__(self, t: float) -> float:
+        if self.type == "none" or self.duration <= 0:
+            return 1.0
+        if self.type == "exponential":
+            return 1.0 - math.exp(-max(t, 0.0) / self.duration)
+        x = min(max(t / self.duration, 0.0), 1.0)
+        return 0.5 * (1.0 - math.cos(math.pi * x))
+
+
+def _tag_by_key(key: str, mapping: dict[str, str], classes: tuple[type, ...]):
+    def disc(v):
+        if isinstance(v, Mapping):
+            val = v.get(key)
+            return mapping.get(val) if isinstance(val, str) else None
+        for cls in classes:
+            if isinstance(v, cls):
+                return mapping.get(getattr(v, key, None))
+        return None
+    return disc
+
+
+Manoeuvre = Annotated[
+    Union[Annotated[TurnManoeuvre, Tag("@turn")], Annotated[SpeedChangeManoeuvre, Tag("@speed_change")]],
+    Discriminator(_tag_by_key("type", {"turn": "@turn", "speed_change": "@speed_change"},
+                              (TurnManoeuvre, SpeedChangeManoeuvre)),
+                  custom_error_type="bad_manoeuvre", custom_error_message="invalid manoeuvre type"),
+]
+Excitation = Annotated[
+    Union[Annotated[SinusoidExcitation, Tag("@sinusoid")], Annotated[TimeSeriesExcitation, Tag("@time_series")]],
+    Discriminator(_tag_by_key("type", {"sinusoid": "@sinusoid", "time_series": "@time_series"},
+                              (SinusoidExcitation, TimeSeriesExcitation)),
+                  custom_error_type="bad_excitation", custom_error_message="invalid excitation type"),
+]
+
+
+class ManoeuvreWindow(NamedTuple):
+    """One manoeuvre in time: ``[start_time, end_time]`` and the speed at both ends."""
+    index: int
+    type: str
+    start_time: float
+    end_time: float
+    initial_speed: float
+    final_speed: float
+
+
+class Vessel(_Model):
+    """Tow-point motion: steady tow, manoeuvres (in the order given) and oscillatory excitation."""
+    tow_point: Vec3(unit="m") = (0.0, 0.0, 0.0)
+    speed: Speed = 0.0
+    heading_deg: Num(unit="deg") = 0.0
+    manoeuvres: tuple[Manoeuvre, ...] = ()
+    excitation: tuple[Excitation, ...] = ()
+    ramp: Ramp = Ramp()
+
+    def schedule(self) -> list[ManoeuvreWindow]:
+        """Start/end times and speeds of the manoeuvres (a turn at zero speed never ends: ``inf``)."""
+        out, v = [], self.speed
+        for i, m in enumerate(self.manoeuvres):
+            if isinstance(m, TurnManoeuvre):
+                vt = v if m.speed is None else m.speed
+                dur = math.inf if vt <= 0 else m.radius * math.radians(abs(m.angle_deg)) / vt
+                out.append(ManoeuvreWindow(i, "turn", m.start_time, m.start_time + dur, vt, vt))
+                v = vt
+            else:
+                out.append(ManoeuvreWindow(i, "speed_change", m.start_time, m.start_time + m.duration,
+                                           v, m.final_speed))
+                v = m.final_speed
+        return out
+
+    @model_validator(mode="after")
+    def _check_schedule(self):
+        probs = []
+        v = self.speed
+        prev_end, prev_i = 0.0, None
+        for i, m in enumerate(self.manoeuvres):
+            if prev_i is not None and m.start_time < prev_end - 1e-9:
+                probs.append((f"manoeuvres[{i}].start_time",
+                              f"must be >= {prev_end:.6g} s, the end of manoeuvres[{prev_i}] (manoeuvres run in "
+                              f"the order given and must not overlap) (got {m.start_time!r})"))
+            if isinstance(m, TurnManoeuvre):
+                if m.speed is not None and not math.isclose(m.speed, v, rel_tol=1e-9, abs_tol=1e-9):
+                    probs.append((f"manoeuvres[{i}].speed",
+                                  f"must equal the vessel speed at start_time ({v:g} m/s); change speed with a "
+                                  f"speed_change manoeuvre (got {m.speed!r})"))
+                vt = v if m.speed is None else m.speed
+                if vt <= 0:
+                    probs.append((f"manoeuvres[{i}]", "a turn needs a positive speed: the vessel speed at "
+                                                      "start_time is 0 m/s (set vessel.speed or add a speed_change)"))
+                    dur = math.inf
+                else:
+                    dur = m.radius * math.radians(abs(m.angle_deg)) / vt
+                v = vt
+            else:
+                dur = m.duration
+                v = m.final_speed
+            prev_end, prev_i = m.start_time + dur, i
+        if probs:
+            _problems(*probs)
+        return self
+
+
+# =====================================================================================================
+# Lines and attachments
+# =====================================================================================================
+class JunctionAttachment(_Model):
+    """Top of a line on another line: ``distance`` (m) along that line's unstretched length from its top."""
+    line: Name
+    distance: Num(gt=0, unit="m")
+
+
+class BodyAttachment(_Model):
+    """A body: as a line ``bottom`` its tow point; as a line ``top`` its ``aft_tow_point``."""
+    body: Name
+
+
+def _top_disc(v):
+    if isinstance(v, str):
+        return "@vessel" if v == "vessel" else None
+    if isinstance(v, JunctionAttachment):
+        return "@junction"
+    if isinstance(v, BodyAttachment):
+        return "@body_top"
+    if isinstance(v, Mapping):
+        if "line" in v:
+            return "@junction"
+        if "body" in v:
+            return "@body_top"
+    return None
+
+
+def _bottom_disc(v):
+    if isinstance(v, str):
+        return "@free" if v == "free" else None
+    if isinstance(v, BodyAttachment) or (isinstance(v, Mapping) and "body" in v):
+        return "@body_bottom"
+    return None
+
+
+Top = Annotated[
+    Union[Annotated[Literal["vessel"], Tag("@vessel")], Annotated[JunctionAttachment, Tag("@junction")],
+          Annotated[BodyAttachment, Tag("@body_top")]],
+    Discriminator(_top_disc, custom_error_type="bad_top", custom_error_message="invalid top attachment"),
+]
+Bottom = Annotated[
+    Union[Annotated[Literal["free"], Tag("@free")], Annotated[BodyAttachment, Tag("@body_bottom")]],
+    Discriminator(_bottom_disc, custom_error_type="bad_bottom", custom_error_message="invalid bottom attachment"),
+]
+
+BULK_DENSITY_RANGE = (300.0, 20000.0)
+
+
+def distribute_segments(total: int, spans: list[float]) -> list[int]:
+    """Split ``total`` segments over ``spans`` (lengths) in proportion to length, at least 1 per span.
+
+    Rounds ``total * span / sum``, then fixes the sum by moving single segments: removing from the span
+    with the shortest segments (among spans with more than one) or adding to the span with the longest.
+    If ``total`` is smaller than the number of spans every span gets 1 (the total is then exceeded)."""
+    k = len(spans)
+    if k == 0:
+        return []
+    tot_len = float(sum(spans))
+    counts = [max(1, int(round(total * s / tot_len))) if tot_len > 0 else 1 for s in spans]
+    while sum(counts) > max(total, k):
+        cand = [i for i in range(k) if counts[i] > 1]
+        i = max(cand, key=lambda j: (counts[j] / spans[j] if spans[j] > 0 else math.inf, -j))
+        counts[i] -= 1
+    while sum(counts) < total:
+        i = max(range(k), key=lambda j: (spans[j] / counts[j], -j))
+        counts[i] += 1
+    return counts
+
+
+class Line(_Model):
+    """A cable. ``segments`` is an int (spread over the spans) or one int per span, top end first."""
+    name: Name
+    length: Num(gt=0, unit="m")
+    segments: Segments
+    diameter: Num(gt=0, le=1, unit="m")
+    mass_per_length: Num(gt=0, unit="kg/m")
+    EA: Num(gt=0, unit="N")
+    cn: Num(ge=0) = 1.2
+    ct: Num(ge=0) = 0.01
+    can: Num(ge=0) = 1.0
+    cat: Num(ge=0) = 0.0
+    top: Top
+    bottom: Bottom
+
+    @model_validator(mode="after")
+    def _check_density(self):
+        rho_c = self.bulk_density
+        lo, hi = BULK_DENSITY_RANGE
+        if not lo <= rho_c <= hi:
+            _problems(("mass_per_length",
+                       f"implies a cable bulk density mass_per_length/(pi*diameter^2/4) = {rho_c:.4g} kg/m^3, "
+                       f"outside {lo:g}-{hi:g} kg/m^3; check units (diameter in m, mass_per_length in kg/m) "
+                       f"(got mass_per_length={self.mass_per_length!r}, diameter={self.diameter!r})"))
+        return self
+
+    @property
+    def bulk_density(self) -> float:
+        return self.mass_per_length / (math.pi * self.diameter ** 2 / 4.0)
+
+    @property
+    def top_kind(self) -> str:
+        """``"vessel"``, ``"line"`` (junction) or ``"body"`` (a body's aft tow point)."""
+        if isinstance(self.top, JunctionAttachment):
+            return "line"
+        if isinstance(self.top, BodyAttachment):
+            return "body"
+        return "vessel"
+
+    @property
+    def bottom_body(self) -> str | None:
+        return self.bottom.body if isinstance(self.bottom, BodyAttachment) else None
+
+    def wet_weight_per_length(self, water: "Water | None" = None) -> float:
+        """Weight in water per unit length (N/m); negative for a buoyant cable."""
+        w = water or Water()
+        return (self.mass_per_length - w.density * math.pi * self.diameter ** 2 / 4.0) * w.gravity
+
+    def span_bounds(self, junction_distances=()) -> list[float]:
+        """``[0, d1, d2, ..., length]``: the attachment points along the line (unique, sorted)."""
+        cuts = sorted({float(d) for d in junction_distances if 0.0 < float(d) < self.length})
+        return [0.0] + cuts + [self.length]
+
+    def span_segments(self, junction_distances=()) -> list[int]:
+        """Segments per span, top end first, for junctions at ``junction_distances`` (m from the top).
+
+        A list ``segments`` is returned as given (its length must equal the number of spans); an int is
+        distributed in proportion to span length with at least 1 per span (:func:`distribute_segments`)."""
+        b = self.span_bounds(junction_distances)
+        spans = [b[i + 1] - b[i] for i in range(len(b) - 1)]
+        if isinstance(self.segments, tuple):
+            if len(self.segments) != len(spans):
+                raise ValueError(f"line {self.name!r}: segments lists {len(self.segments)} counts but the line "
+                                 f"has {len(spans)} spans")
+            return list(self.segments)
+        return distribute_segments(self.segments, spans)
+
+
+# =====================================================================================================
+# Bodies
+# =====================================================================================================
+class CoefficientTable(_Model):
+    """Force/moment coefficients vs incidence. A table starting at 0 deg is mirrored (drag even, lift and
+    moment odd); outside the table the end value is held."""
+    incidence_deg: tuple[Num(ge=-90, le=90, unit="deg"), ...]
+    drag: tuple[Num(ge=0), ...]
+    lift: tuple[Num(), ...]
+    moment: tuple[Num(), ...]
+
+    @model_validator(mode="after")
+    def _check(self):
+        probs = []
+        n = len(self.incidence_deg)
+        if n < 2:
+            probs.append(("incidence_deg", f"must have at least 2 entries (got {n})"))
+        for i in range(1, n):
+            if not self.incidence_deg[i] > self.incidence_deg[i - 1]:
+                probs.append((f"incidence_deg[{i}]", f"must be strictly increasing: > {self.incidence_deg[i - 1]!r} "
+                                                     f"deg (got {self.incidence_deg[i]!r})"))
+                break
+        for col in ("drag", "lift", "moment"):
+            m = len(getattr(self, col))
+            if m != n:
+                probs.append((col, f"must have the same length as incidence_deg ({n}) (got {m})"))
+        if probs:
+            _problems(*probs)
+        return self
+
+    @property
+    def mirrored(self) -> bool:
+        return self.incidence_deg[0] == 0.0
+
+    def full(self) -> tuple[list[float], list[float], list[float], list[float]]:
+        """Columns over the full range: a table starting at 0 is mirrored (drag even; lift and moment odd
+        about their value at 0, i.e. ``f(-a) = 2 f(0) - f(a)``, which is plain odd when ``f(0) = 0``)."""
+        inc, cd, cl, cm = map(list, (self.incidence_deg, self.drag, self.lift, self.moment))
+        if not self.mirrored:
+            return inc, cd, cl, cm
+        return ([-a for a in inc[:0:-1]] + inc, cd[:0:-1] + cd,
+                [2 * cl[0] - c for c in cl[:0:-1]] + cl, [2 * cm[0] - c for c in cm[:0:-1]] + cm)
+
+    def evaluate(self, incidence_deg: float) -> tuple[float, float, float]:
+        """``(drag, lift, moment)`` at an incidence (deg), linear interpolation, end values held."""
+        inc, cd, cl, cm = self.full()
+        a = float(incidence_deg)
+        if a <= inc[0]:
+            return cd[0], cl[0], cm[0]
+        if a >= inc[-1]:
+            return cd[-1], cl[-1], cm[-1]
+        for i in range(1, len(inc)):
+            if a <= inc[i]:
+                w = (a - inc[i - 1]) / (inc[i] - inc[i - 1])
+                return tuple(c[i - 1] + w * (c[i] - c[i - 1]) for c in (cd, cl, cm))
+        return cd[-1], cl[-1], cm[-1]  # pragma: no cover
+
+    def without_lift_offset(self) -> "CoefficientTable":
+        """The same table with the lift at zero incidence subtracted (depressor horizontal default)."""
+        l0 = self.evaluate(0.0)[1]
+        if l0 == 0.0:
+            return self
+        return self.model_copy(update={"lift": tuple(c - l0 for c in self.lift)})
+
+
+class _BodyBase(_Model):
+    name: Name
+    mass: Num(gt=0, unit="kg")
+    volume: Num(ge=0, unit="m^3")
+
+    @property
+    def is_rigid(self) -> bool:
+        return self.kind in ("fish", "depressor")
+
+    def wet_weight(self, water: "Water | None" = None) -> float:
+        """Weight in water (N); negative if buoyant."""
+        w = water or Water()
+        return (self.mass - w.density * self.volume) * w.gravity
+
+
+class PointBody(_BodyBase):
+    """Translation-only body (ball, clump) with isotropic quadratic drag."""
+    kind: Literal["ball", "clump"]
+    drag_area: Num(ge=0, unit="m^2") = 0.0
+    added_mass_coefficient: Num(ge=0) = 0.5
+
+
+class RigidBody(_BodyBase):
+    """6-DOF body (fish, depressor) about its tow point; offsets are body-axis vectors from the tow point."""
+    kind: Literal["fish", "depressor"]
+    inertia: Vec3(gt=0, unit="kg m^2")
+    cg: Vec3(unit="m")
+    cb: Vec3(unit="m") | None = None
+    aft_tow_point: Vec3(unit="m") | None = None
+    added_mass: Vec3(ge=0, unit="kg") = (0.0, 0.0, 0.0)
+    added_inertia: Vec3(ge=0, unit="kg m^2") = (0.0, 0.0, 0.0)
+    reference_area: Num(gt=0, unit="m^2")
+    reference_length: Num(gt=0, unit="m")
+    coefficients: CoefficientTable
+    horizontal_coefficients: CoefficientTable | None = None
+    rotational_damping: Vec3(ge=0, unit="") = (0.1, 0.1, 0.1)
+    quadratic_rotational_damping: Vec3(ge=0, unit="") = (0.5, 0.5, 0.5)
+
+    @property
+    def centre_of_buoyancy(self) -> tuple[float, float, float]:
+        """``cb``, defaulting to ``cg``."""
+        return self.cb if self.cb is not None else self.cg
+
+    @property
+    def horizontal_table(self) -> CoefficientTable:
+        """The effective horizontal-plane table: as given, else the vertical table (fish) or the vertical
+        table with its zero-incidence lift removed (depressor)."""
+        if self.horizontal_coefficients is not None:
+            return self.horizontal_coefficients
+        if self.kind == "depressor":
+            return self.coefficients.without_lift_offset()
+        return self.coefficients
+
+
+Body = Annotated[
+    Union[Annotated[RigidBody, Tag("@rigid")], Annotated[PointBody, Tag("@point")]],
+    Discriminator(_tag_by_key("kind", {"fish": "@rigid", "depressor": "@rigid", "ball": "@point",
+                                       "clump": "@point"}, (RigidBody, PointBody)),
+                  custom_error_type="bad_body", custom_error_message="invalid body kind"),
+]
+
+_TAG_CLASSES = {
+    "@turn": TurnManoeuvre, "@speed_change": SpeedChangeManoeuvre, "@sinusoid": SinusoidExcitation,
+    "@time_series": TimeSeriesExcitation, "@junction": JunctionAttachment, "@body_top": BodyAttachment,
+    "@body_bottom": BodyAttachment, "@rigid": RigidBody, "@point": PointBody, "@vessel": None, "@free": None,
+}
+
+
+# =====================================================================================================
+# Solver
+# =====================================================================================================
+class Solver(_Model):
+    """Time step and Newton-iteration settings."""
+    dt: Num(ge=1e-5, le=1, unit="s") = 0.02
+    tolerance: Num(gt=0, unit="N") = 0.1
+    relative_tolerance: Num(ge=0, lt=1) = 1e-6
+    max_iterations: Int(ge=1) = 25
+    max_step_cuts: Int(ge=0) = 4
+    max_strain: Num(gt=0) = 0.2
+    settle_time: Num(ge=0, unit="s") = 0.0
+
+
+# =====================================================================================================
+# Scene
+# =====================================================================================================
+class Scene(_Model):
+    """A validated towed-system scene. Build with :func:`load_scene`."""
+    name: Name
+    description: Text = ""
+    water: Water = Water()
+    current: Current = Current()
+    vessel: Vessel = Vessel()
+    lines: tuple[Line, ...] = Field(min_length=1)
+    bodies: tuple[Body, ...] = ()
+    solver: Solver = Solver()
+
+    _source_dir: str | None = PrivateAttr(default=None)
+
+    # ---------------------------------------------------------------- cross-field / topology checks
+    @model_validator(mode="after")
+    def _check_topology(self):
+        probs: list[tuple[str, str]] = []
+        lines, bodies = self.lines, self.bodies
+        line_idx: dict[str, int] = {}
+        for i, ln in enumerate(lines):
+            if ln.name in line_idx:
+                probs.append((f"lines[{i}].name", f"duplicate line name {ln.name!r} (also lines[{line_idx[ln.name]}])"))
+            else:
+                line_idx[ln.name] = i
+        body_idx: dict[str, int] = {}
+        for k, b in enumerate(bodies):
+            if b.name in body_idx:
+                probs.append((f"bodies[{k}].name", f"duplicate body name {b.name!r} (also bodies[{body_idx[b.name]}])"))
+            else:
+                body_idx[b.name] = k
+        known_lines = ", ".join(repr(n) for n in line_idx) or "none"
+        known_bodies = ", ".join(repr(n) for n in body_idx) or "none"
+
+        refs_ok = True
+        roots: list[int] = []
+        bottom_of: dict[str, list[int]] = {}
+        for i, ln in enumerate(lines):
+            top = ln.top
+            if isinstance(top, JunctionAttachment):
+                if top.line not in line_idx:
+                    refs_ok = False
+                    probs.append((f"lines[{i}].top.line", f"unknown line {top.line!r} (known lines: {known_lines})"))
+                elif top.line == ln.name:
+                    refs_ok = False
+                    probs.append((f"lines[{i}].top.line", f"a line cannot hang from itself (got {top.line!r})"))
+                else:
+                    parent = lines[line_idx[top.line]]
+                    if not top.distance < parent.length:
+                        probs.append((f"lines[{i}].top.distance",
+                                      f"must be < {parent.length:g} m, the length of line {top.line!r} "
+                                      f"(junction beyond the line's end) (got {top.distance!r})"))
+            elif isinstance(top, BodyAttachment):
+                if top.body not in body_idx:
+                    refs_ok = False
+                    probs.append((f"lines[{i}].top.body", f"unknown body {top.body!r} (known bodies: {known_bodies})"))
+                else:
+                    k = body_idx[top.body]
+                    b = bodies[k]
+                    if not isinstance(b, RigidBody) or b.aft_tow_point is None:
+                        refs_ok = False
+                        why = ("is a point body (only fish/depressor bodies have an aft tow point)"
+                               if not isinstance(b, RigidBody) else f"has no aft_tow_point (set bodies[{k}].aft_tow_point)")
+                        probs.append((f"lines[{i}].top.body",
+                                      f"a line can only hang from a body's aft_tow_point, but body {top.body!r} {why}"))
+            else:
+                roots.append(i)
+            bb = ln.bottom_body
+            if bb is not None:
+                if bb not in body_idx:
+                    refs_ok = False
+                    probs.append((f"lines[{i}].bottom.body", f"unknown body {bb!r} (known bodies: {known_bodies})"))
+                else:
+                    bottom_of.setdefault(bb, []).append(i)
+
+        for k, b in enumerate(bodies):
+            if body_idx.get(b.name) != k:
+                continue
+            users = bottom_of.get(b.name, [])
+            if not users:
+                refs_ok = False
+                probs.append((f"bodies[{k}].name", f"body {b.name!r} is not the bottom of any line "
+                                                   f"(each body must be the bottom of exactly one line)"))
+            for j in users[1:]:
+                refs_ok = False
+                probs.append((f"lines[{j}].bottom.body",
+                              f"body {b.name!r} is already the bottom of line {lines[users[0]].name!r} "
+                              f"(a body is the bottom of exactly one line)"))
+
+        if not roots:
+            refs_ok = False
+            probs.append(("lines", 'exactly one line must have top = "vessel" (got none)'))
+        for i in roots[1:]:
+            refs_ok = False
+            probs.append((f"lines[{i}].top", f'only one line may have top = "vessel"; line '
+                                             f'{lines[roots[0]].name!r} already does'))
+
+        if refs_ok and not probs:
+            # every line must reach the vessel through its parents (no cycles)
+            def parent(ln: Line) -> str | None:
+                if isinstance(ln.top, JunctionAttachment):
+                    return ln.top.line
+                if isinstance(ln.top, BodyAttachment):
+                    return lines[bottom_of[ln.top.body][0]].name
+                return None
+
+            for i, ln in enumerate(lines):
+                seen = [ln.name]
+                cur = ln
+                while True:
+                    p = parent(cur)
+                    if p is None:
+                        break
+                    if p in seen:
+                        cyc = " -> ".join(seen[seen.index(p):] + [p])
+                        probs.append((f"lines[{i}].top", f"line {ln.name!r} is not connected to the vessel "
+                                                         f"(cycle: {cyc}); the lines must form a tree rooted "
+                                                         f"at the vessel"))
+                        break
+                    seen.append(p)
+                    cur = lines[line_idx[p]]
+
+        if not probs:
+            for i, ln in enumerate(lines):
+                if isinstance(ln.segments, tuple):
+                    d = self._junction_distances(ln.name)
+                    n = len(d) + 1
+                    if len(ln.segments) != n:
+                        where = (f" (junctions at {', '.join(f'{x:g}' for x in d)} m from its top)" if d else
+                                 " (no junctions on it)")
+                        probs.append((f"lines[{i}].segments",
+                                      f"must list one count per span: line {ln.name!r} has {n} span"
+                                      f"{'s' if n != 1 else ''}{where} (got {len(ln.segments)} entries)"))
+        if probs:
+            _problems(*probs)
+        return self
+
+    # ---------------------------------------------------------------- lookups
+    @property
+    def source_dir(self) -> str | None:
+        """Folder against which relative file paths (time series) resolve; None = working directory."""
+        return self._source_dir
+
+    def line(self, name: str) -> Line:
+        for ln in self.lines:
+            if ln.name == name:
+                return ln
+        raise KeyError(f"no line named {name!r} (lines: {', '.join(repr(l.name) for l in self.lines)})")
+
+    def body(self, name: str) -> RigidBody | PointBody:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(f"no body named {name!r} (bodies: {', '.join(repr(b.name) for b in self.bodies) or 'none'})")
+
+    def _junction_distances(self, line_name: str) -> list[float]:
+        return sorted({ln.top.distance for ln in self.lines
+                       if isinstance(ln.top, JunctionAttachment) and ln.top.line == line_name})
+
+    def junctions(self, line_name: str) -> list[float]:
+        """Sorted, unique distances (m from the top end) of the junctions on a line."""
+        self.line(line_name)
+        return self._junction_distances(line_name)
+
+    def children(self, line_name: str) -> list[Line]:
+        """Lines whose top is a junction on ``line_name`` (sorted by distance)."""
+        self.line(line_name)
+        kids = [ln for ln in self.lines if isinstance(ln.top, JunctionAttachment) and ln.top.line == line_name]
+        return sorted(kids, key=lambda ln: ln.top.distance)
+
+    def span_segments(self, line_name: str) -> list[int]:
+        """Segments per span of a line (top end first), given the junctions on it."""
+        return self.line(line_name).span_segments(self._junction_distances(line_name))
+
+    @property
+    def root_line(self) -> Line:
+        """The line hanging from the vessel."""
+        return next(ln for ln in self.lines if ln.top_kind == "vessel")
+
+    def body_line(self, body_name: str) -> Line:
+        """The line whose bottom is the body."""
+        self.body(body_name)
+        return next(ln for ln in self.lines if ln.bottom_body == body_name)
+
+    def tail_lines(self, body_name: str) -> list[Line]:
+        """Lines hanging from the body's aft tow point (series tows)."""
+        self.body(body_name)
+        return [ln for ln in self.lines if isinstance(ln.top, BodyAttachment) and ln.top.body == body_name]
+
+    def lines_top_down(self) -> list[Line]:
+        """All lines, each after the line (or body's line) it hangs from, starting at the vessel."""
+        order: list[Line] = []
+        queue = [self.root_line]
+        while queue:
+            ln = queue.pop(0)
+            order.append(ln)
+            queue += self.children(ln.name)
+            if ln.bottom_body is not None:
+                queue += self.tail_lines(ln.bottom_body)
+        return order
+
+    # ---------------------------------------------------------------- export / variants
+    def to_dict(self) -> dict:
+        """Plain dict (lists, floats, strings) equivalent to the TOML file; ``load_scene`` accepts it."""
+        return _clean(self.model_dump(mode="json"))
+
+    def to_toml(self) -> str:
+        """TOML text that loads back to an equal scene."""
+        return dumps_toml(self.to_dict())
+
+    def save(self, path) -> Path:
+        """Write the scene as TOML."""
+        p = Path(path)
+        p.write_text(self.to_toml(), encoding="utf-8")
+        return p
+
+    def with_overrides(self, overrides: Mapping[str, Any] | None = None, /, **kw: Any) -> "Scene":
+        """New validated scene with dotted-path overrides, e.g. ``{"solver.dt": 0.01, "vessel.speed": 2.0}``.
+
+        Paths: ``a.b.c``; list items by index ``lines[0].length`` (or ``lines.0.length``) or by name
+        ``lines.primary.length`` / ``bodies[fish].mass``. Keyword arguments may use ``__`` for ``.``
+        (``solver__dt=0.01``). A value of ``None`` removes the key (back to its default)."""
+        items: dict[str, Any] = {}
+        if overrides is not None:
+            if not isinstance(overrides, Mapping):
+                raise SceneError(f"overrides must be a mapping of dotted paths to values (got {_short(overrides)})")
+            items.update(overrides)
+        items.update({k.replace("__", "."): v for k, v in kw.items()})
+        data = self.to_dict()
+        probs = []
+        for key, value in items.items():
+            try:
+                _set_path(data, str(key), copy.deepcopy(value))
+            except (KeyError, IndexError, TypeError, ValueError) as exc:
+                probs.append((f"override {key!r}", str(exc.args[0]) if exc.args else "invalid path"))
+        if probs:
+            raise SceneError(probs)
+        return _validate(data, self._source_dir, None)
+
+
+def _clean(d):
+    """Drop ``None`` values (TOML has no null) recursively."""
+    if isinstance(d, dict):
+        return {k: _clean(v) for k, v in d.items() if v is not None}
+    if isinstance(d, list):
+        return [_clean(v) for v in d]
+    return d
+
+
+_TOKEN = re.compile(r"([^.\[\]]+)|\[([^\]]*)\]")
+
+
+def _split_path(path: str) -> list[str]:
+    if not path or path.startswith(".") or path.endswith("."):
+        raise ValueError(f"not a dotted path: {path!r}")
+    toks = [m.group(1) if m.group(1) is not None else m.group(2) for m in _TOKEN.finditer(path)]
+    if not toks or "".join(toks) == "" or any(t == "" for t in toks):
+        raise ValueError(f"not a dotted path: {path!r}")
+    return [t.strip() for t in toks]
+
+
+def _list_index(lst: list, tok: str) -> int:
+    if re.fullmatch(r"-?\d+", tok):
+        i = int(tok)
+        if not -len(lst) <= i < len(lst):
+            raise IndexError(f"index {i} out of range (list has {len(lst)} entries)")
+        return i % len(lst)
+    names = [x.get("name") if isinstance(x, dict) else None for x in lst]
+    if tok in names:
+        return names.index(tok)
+    raise KeyError(f"no entry named {tok!r} (names: {', '.join(repr(n) for n in names if n is not None) or 'none'})")
+
+
+def _set_path(data: dict, path: str, value: Any) -> None:
+    toks = _split_path(path)
+    cur: Any = data
+    for t in toks[:-1]:
+        if isinstance(cur, list):
+            cur = cur[_list_index(cur, t)]
+        elif isinstance(cur, dict):
+            if t not in cur or cur[t] is None:
+                cur[t] = {}
+            elif not isinstance(cur[t], (dict, list)):
+                cur[t] = {}
+            cur = cur[t]
+        else:
+            raise TypeError(f"cannot descend into {_short(cur)} at {t!r}")
+    last = toks[-1]
+    if isinstance(cur, list):
+        i = _list_index(cur, last)
+        if value is None:
+            del cur[i]
+        else:
+            cur[i] = value
+    elif isinstance(cur, dict):
+        if value is None:
+            cur.pop(last, None)
+        else:
+            cur[last] = value
+    else:
+        raise TypeError(f"cannot set {last!r} inside {_short(cur)}")
+
+
+# =====================================================================================================
+# TOML writer (tomllib only reads)
+# =====================================================================================================
+_BARE = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _key(k: str) -> str:
+    return k if _BARE.match(k) else _toml_str(k)
+
+
+def _toml_str(s: str) -> str:
+    out = ['"']
+    for ch in s:
+        o = ord(ch)
+        if ch == '"':
+            out.append('\\"')
+        elif ch == "\\":
+            out.append("\\\\")
+        elif ch == "\n":
+            out.append("\\n")
+        elif ch == "\t":
+            out.append("\\t")
+        elif ch == "\r":
+            out.append("\\r")
+        elif o < 0x20 or o == 0x7F:
+            out.append(f"\\u{o:04X}")
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+        r = repr(v)
+        return r if any(c in r for c in ".en") else r + ".0"
+    if isinstance(v, str):
+        return _toml_str(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def _is_table_array(v) -> bool:
+    return isinstance(v, list) and len(v) > 0 and all(isinstance(x, dict) for x in v)
+
+
+def _emit_table(d: dict, prefix: str, out: list[str]) -> None:
+    simple = {k: v for k, v in d.items() if not isinstance(v, dict) and not _is_table_array(v)}
+    small = {k: v for k, v in d.items() if isinstance(v, dict) and len(v) <= 3
+             and all(not isinstance(x, (dict, list)) for x in v.values())}
+    for k, v in simple.items():
+        out.append(f"{_key(k)} = {_toml_value(v)}")
+    for k, v in small.items():
+        out.append(f"{_key(k)} = {_toml_value(v)}")
+    for k, v in d.items():
+        if k in simple or k in small:
+            continue
+        name = f"{prefix}.{_key(k)}" if prefix else _key(k)
+        if isinstance(v, dict):
+            out.append("")
+            out.append(f"[{name}]")
+            _emit_table(v, name, out)
+        else:
+            for item in v:
+                out.append("")
+                out.append(f"[[{name}]]")
+                _emit_table(item, name, out)
+
+
+def dumps_toml(d: dict) -> str:
+    """Serialise a scene dict (nested dicts/lists of scalars) to TOML."""
+    out: list[str] = []
+    _emit_table(d, "", out)
+    return "\n".join(out).lstrip("\n") + "\n"
+
+
+# =====================================================================================================
+# Loading
+# =====================================================================================================
+def scene_path(name: str) -> Path:
+    """Path of an embedded scene file."""
+    return SCENES_DIR / f"{name}.toml"
+
+
+def _embedded_names() -> list[str]:
+    try:
+        return sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+    except OSError:  # pragma: no cover
+        return []
+
+
+def list_scenes() -> dict[str, str]:
+    """Embedded scenes: ``{name: one-line description}`` (the first line of each ``description``)."""
+    out = {}
+    for name in _embedded_names():
+        try:
+            with open(scene_path(name), "rb") as fh:
+                desc = tomllib.load(fh).get("description", "")
+        except (OSError, tomllib.TOMLDecodeError):  # pragma: no cover
+            desc = ""
+        first = next((s.strip() for s in str(desc).splitlines() if s.strip()), "")
+        out[name] = first
+    return out
+
+
+def _validate(data: Any, base_dir, source: str | None) -> Scene:
+    if not isinstance(data, Mapping):
+        raise SceneError([("", f"a scene must be a table/dict (got {_short(data)})")], source)
+    try:
+        sc = Scene.model_validate(dict(data), context={"base_dir": base_dir})
+    except ValidationError as exc:
+        raise SceneError.from_validation_error(exc, source) from None
+    except SceneError:
+        raise
+    except RecursionError:
+        raise SceneError([("", "scene data is nested too deeply")], source) from None
+    except Exception as exc:   # never leak a raw traceback from validation
+        raise SceneError([("", f"{_INTERNAL}: {type(exc).__name__}: {exc}")], source) from None
+    sc._source_dir = str(base_dir) if base_dir is not None else None
+    return sc
+
+
+def _load_file(path: Path, base_dir=None) -> Scene:
+    src = str(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise SceneError([("", f"scene file not found: {path}")]) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError([("", f"cannot read scene file {path}: {exc}")]) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError([("", f"invalid TOML: {exc}")], src) from None
+    return _validate(data, base_dir if base_dir is not None else path.resolve().parent, src)
+
+
+def load_scene(source: Any = None, *, base_dir=None) -> Scene:
+    """Load and validate a scene.
+
+    ``source``: a :class:`Scene` (returned as is), a dict, a path to a ``.toml`` file, or the name of an
+    embedded scene (see :func:`list_scenes`); ``None`` loads :data:`DEFAULT_SCENE`. ``base_dir`` overrides
+    the folder against which relative time-series paths resolve. Raises :class:`SceneError` on any
+    problem."""
+    if source is None:
+        source = DEFAULT_SCENE
+    if isinstance(source, Scene):
+        return source
+    if isinstance(source, Mapping):
+        return _validate(copy.deepcopy(dict(source)), base_dir, None)
+    if isinstance(source, (str, PathLike)):
+        s = str(source) if isinstance(source, str) else None
+        names = _embedded_names()
+        if s is not None and s in names:
+            return _load_file(scene_path(s), base_dir if base_dir is not None else SCENE_DATA_DIR)
+        p = Path(source)
+        if p.is_file() or p.suffix.lower() == ".toml":
+            return _load_file(p, base_dir)
+        raise SceneError([("", f"unknown scene {str(source)!r}: not a scene file and not an embedded scene "
+                               f"(embedded: {', '.join(names) or 'none'})")])
+    raise SceneError([("", f"cannot load a scene from a {type(source).__name__}; give a path, a dict, a Scene "
+                           f"or an embedded scene name")])
