@@ -23,7 +23,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit as _njit
+
+# reassociation/contraction allowed; NaN/Inf semantics kept (failure detection relies on them)
+_FASTMATH = {"reassoc", "contract", "arcp", "nsz"}
+
+
+def njit(*args, **kw):
+    kw.setdefault("fastmath", _FASTMATH)
+    return _njit(*args, **kw)
 
 # status codes returned by the step kernels
 OK = 0
@@ -35,6 +43,7 @@ FAIL_ANGLE = 4         # body pitch reached the Euler singularity
 FREE = 0
 PRESCRIBED_TOP = 1
 PRESCRIBED_AFT = 2
+PRESCRIBED_FIXED = 3   # anchor: fixed in space
 
 
 # ----------------------------------------------------------------------------------------------
@@ -295,8 +304,8 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
     nh = btab_n[b, 1]
     bdiag_out[0] = 0.0
     if vmag > 1e-9:
-        th_v = math.degrees(math.atan2(-wr, ur))   # + when the flow meets the underside
-        th_h = math.degrees(math.atan2(-vr, ur))   # + when the flow meets the starboard side
+        th_v = math.degrees(math.atan2(wr, ur))    # vertical incidence (docs/scene-format.md)
+        th_h = math.degrees(math.atan2(vr, ur))    # horizontal incidence (sideslip)
         cd_v = table_lookup(th_v, btab[b, 0], btab[b, 1], nv)
         cl_v = table_lookup(th_v, btab[b, 0], btab[b, 2], nv)
         cm_v = table_lookup(th_v, btab[b, 0], btab[b, 3], nv)
@@ -314,15 +323,17 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
         f_out[2] -= q * cd * wr / vmag
         # lift in the x'z' plane, perpendicular to v_r, positive toward +z'
         tv = math.radians(th_v)
-        f_out[0] += q * cl_v * math.sin(tv)
+        f_out[0] -= q * cl_v * math.sin(tv)
         f_out[2] += q * cl_v * math.cos(tv)
-        # side force in the x'y' plane, positive toward +y'
+        # side force in the x'y' plane, perpendicular to v_r, positive toward +y'
         th = math.radians(th_h)
-        f_out[0] += q * cy_h * math.sin(th)
+        f_out[0] -= q * cy_h * math.sin(th)
         f_out[1] += q * cy_h * math.cos(th)
-        # weathervane moments about the tow point
-        m_out[1] += q * length * cm_v
-        m_out[2] -= q * length * cm_h
+        # weathervane moments about the tow point (C_m > 0 turns the nose toward v_r): incidence > 0
+        # in the vertical plane means v_r points above the nose -> nose-up (negative pitch) moment;
+        # in the horizontal plane v_r points to port of the nose -> positive yaw moment
+        m_out[1] -= q * length * cm_v
+        m_out[2] += q * length * cm_h
         # isotropic drag-derivative estimate for the implicit drag
         bdiag_out[0] = qa * vmag * (2.0 * cd + bp[b, 19])
     # rotational damping: linear rotary derivatives + Hover (17) quadratic term

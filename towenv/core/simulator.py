@@ -244,6 +244,55 @@ class Simulator:
         lm = self.system.line(name)
         return {"positions": self.positions[lm.nodes].copy(), "tensions": self.tensions[lm.segments].copy()}
 
+    def anchor_force(self, name) -> np.ndarray:
+        """Force of line ``name`` on its anchor (N, global axes), from the last step's loads."""
+        s = self.system
+        node = int(s.line(name).nodes[-1])
+        if node not in s.anchors:
+            raise ValueError(f"line {name!r} does not end at an anchor")
+        r = self.positions
+        v = self.velocities
+        ws = self._ws
+        tang, stretched, drag, bmat, madd, mnode, bnode, fnode = ws[:8]
+        K.segment_loads(r, v, s.seg_lo, s.seg_up, s.l0, s.diam, s.mu, s.cn, s.ct, s.can, s.cat, s.rho, s.g,
+                        s.cur_z, s.cur_v, tang, stretched, drag, bmat, madd)
+        K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g,
+                        drag, bmat, madd, s.pb_mass, s.pb_vol, s.pb_cda, s.pb_ca, s.cur_z, s.cur_v, mnode, bnode,
+                        fnode)
+        out = np.zeros(3)
+        K.node_reaction(node, r, r, r, r, self.settings.dt, s.node_nseg, s.node_segs, s.node_sgn, tang,
+                        self.tensions, mnode, fnode, out)
+        return out
+
+    def node_tensions(self, name) -> np.ndarray:
+        """Cable tension at each node of a line (top first), free of the half-segment bias of segment
+        tensions (verification.md V1/V2): at a node, the force carried by the cable there is the
+        adjacent segment's tension vector corrected by the external load (wet weight + drag) of the half
+        segment in between; interior nodes average the estimates from both sides. The vessel end uses
+        the tow-point reaction."""
+        s = self.system
+        lm = s.line(name)
+        r = self.positions
+        v = self.velocities
+        tang, stretched, drag, bmat, madd = (np.empty((s.n_segments, 3)), np.empty(s.n_segments),
+                                              np.empty((s.n_segments, 2, 3)), np.empty((s.n_segments, 2, 3, 3)),
+                                              np.empty((s.n_segments, 3, 3)))
+        K.segment_loads(r, v, s.seg_lo, s.seg_up, s.l0, s.diam, s.mu, s.cn, s.ct, s.can, s.cat, s.rho, s.g,
+                        s.cur_z, s.cur_v, tang, stretched, drag, bmat, madd)
+        T = self.tensions
+        est = [[] for _ in range(len(lm.nodes))]
+        for k, seg in enumerate(lm.segments):
+            wet = (s.mu[seg] - s.rho * 0.25 * np.pi * s.diam[seg] ** 2) * s.g * s.l0[seg]
+            f = T[seg] * tang[seg]
+            half_up = 0.5 * drag[seg, 1] - np.array([0.0, 0.0, 0.5 * wet])
+            half_lo = 0.5 * drag[seg, 0] - np.array([0.0, 0.0, 0.5 * wet])
+            est[k].append(np.linalg.norm(f - half_up))       # upper node of the segment
+            est[k + 1].append(np.linalg.norm(f + half_lo))   # lower node
+        out = np.array([np.mean(e) for e in est])
+        if lm.nodes[0] == s.top_node:
+            out[0] = self.top_tension
+        return out
+
     def body_state(self, name):
         bm = self.system.body(name)
         pos = self.positions[bm.node].copy()

@@ -165,5 +165,26 @@ def quasi_static(sys: System, top_position, U, n_passes=None):
             s = sys.node_up_seg[a]
             stretch = 1.0 if np.isinf(sys.ea[s]) else 1.0 + tens[s] / sys.ea[s]
             r[a] = r[sys.seg_up[s]] - sys.l0[s] * stretch * tang[s]
+    if sys.anchors:
+        _anchored_lines(sys, r, tens)
     _ = FREE
     return r, tens, ang
+
+
+def _anchored_lines(sys: System, r, tens):
+    """Lines ending at an anchor start straight between their top node and the anchor, under the
+    tension of their own weight; the dynamic settle (``solver.settle_time``) finds the true shape."""
+    for lm in sys.lines:
+        bottom = int(lm.nodes[-1])
+        if bottom not in sys.anchors:
+            continue
+        top = r[int(lm.nodes[0])]
+        anchor = sys.anchors[bottom]
+        lengths = sys.l0[lm.segments]
+        frac = np.concatenate([[0.0], np.cumsum(lengths) / lengths.sum()])
+        for f, nd in zip(frac, lm.nodes):
+            r[int(nd)] = top + f * (anchor - top)
+        span = np.linalg.norm(anchor - top)
+        w = np.abs((sys.mu[lm.segments] - sys.rho * 0.25 * np.pi * sys.diam[lm.segments] ** 2) * sys.g)
+        strain = max(span / lengths.sum() - 1.0, 0.0)
+        tens[lm.segments] = np.maximum(sys.ea[lm.segments] * strain, 0.5 * w * lengths.sum())

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kernels import FREE, PRESCRIBED_AFT, PRESCRIBED_TOP
+from .kernels import FREE, PRESCRIBED_AFT, PRESCRIBED_FIXED, PRESCRIBED_TOP
 
 MAX_SEGS_PER_NODE = 8
 BODY_PARAM = 30          # see the layout in _rigid_body_params
@@ -78,6 +78,7 @@ class System:
     cur_v: np.ndarray
     lines: list[LineMap] = field(default_factory=list)
     bodies: list[BodyMap] = field(default_factory=list)
+    anchors: dict = field(default_factory=dict)          # node -> fixed position
 
     @property
     def n_nodes(self) -> int:
@@ -152,6 +153,8 @@ def _attachment(end):
         return ("line", _get(end, "line"), float(_get(end, "distance")))
     if _get(end, "body") is not None:
         return ("body", _get(end, "body"), None)
+    if _get(end, "anchor") is not None:
+        return ("anchor", None, tuple(float(x) for x in _get(end, "anchor")))
     kind = _get(end, "kind") or _get(end, "type")
     if kind in ("vessel", "free"):
         return (kind, None, None)
@@ -211,6 +214,7 @@ def build_system(scene) -> System:
     line_maps: dict[str, LineMap] = {}
     junction_node: dict[tuple[str, float], int] = {}
     body_node_of: dict[str, int] = {}
+    anchors: dict[int, np.ndarray] = {}
     aft_node_of: dict[str, int] = {}
 
     # process lines parents-first
@@ -244,11 +248,12 @@ def build_system(scene) -> System:
         cuts = sorted(set(junctions[name]))
         bounds = [0.0] + cuts + [length]
         spans = [bounds[i + 1] - bounds[i] for i in range(len(bounds) - 1)]
-        counts = _span_segments(_get(ln, "segments"), spans)
+        counts = (ln.span_segments(cuts) if hasattr(ln, "span_segments")
+                  else _span_segments(_get(ln, "segments"), spans))
         props = (float(_get(ln, "diameter")), float(_get(ln, "mass_per_length")), float(_get(ln, "cn", 1.2)),
                  float(_get(ln, "ct", 0.01)), float(_get(ln, "can", 1.0)), float(_get(ln, "cat", 0.0)),
                  float(_get(ln, "EA")))
-        bkind, bref, _ = _attachment(_get(ln, "bottom"))
+        bkind, bref, banchor = _attachment(_get(ln, "bottom"))
         lnodes = [top]
         lsegs = []
         for isp, (sp, cnt) in enumerate(zip(spans, counts)):
@@ -257,6 +262,9 @@ def build_system(scene) -> System:
                 if last and bkind == "body":
                     nd = new_node(FREE)
                     body_node_of[bref] = nd
+                elif last and bkind == "anchor":
+                    nd = new_node(PRESCRIBED_FIXED)
+                    anchors[nd] = np.array(banchor, float)
                 else:
                     nd = new_node(FREE)
                 seg_up.append(lnodes[-1])
@@ -370,7 +378,7 @@ def build_system(scene) -> System:
                   body_node=body_node, body_aft_node=body_aft, bp=bp, btab_n=btab_n, btab=btab,
                   pb_mass=pb_mass, pb_vol=pb_vol, pb_cda=pb_cda, pb_ca=pb_ca,
                   rho=rho, g=g, cur_z=cur_z, cur_v=cur_v,
-                  lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps)
+                  lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps, anchors=anchors)
 
 
 def current_table(cur):

@@ -2,8 +2,13 @@
 
 Every function here is written from the equations of ``model.md`` (sections 2, 3.3–3.4 and 5.1–5.6),
 vectorised over segments and nodes where that reads naturally, and deliberately *not* by transcribing the
-kernel loops. The tests (``tests/test_twin.py``) compare each numba kernel with its twin on random states.
-Speed is irrelevant here; clarity is the point.
+kernel loops (matrices instead of index loops, ``np.add.at`` scatters, a sparse C M̃⁻¹ Cᵀ product for the
+tension matrix, scipy's sparse LU instead of the tree elimination). Where the kernels deliberately depart
+from model.md — drag evaluated at each end node (trapezoidal rule) instead of at the mean end velocity,
+and the convergence aids of the Newton iteration (implicit body damping, string stiffness, relaxed body
+rotation, tension extrapolation) — the twin follows the kernels' documented choice, since the point is to
+reproduce them. The tests (``tests/test_twin.py``) compare each numba kernel with its twin on random
+states. Speed is irrelevant here; clarity is the point.
 
 Conventions (same as the kernels): ``t_s`` is the unit tangent of segment ``s`` from its lower node to
 its upper node (toward the ship); ``σ_{a,s} = +1`` if node ``a`` is the lower node of ``s`` and ``−1`` if
@@ -20,9 +25,11 @@ Contents
 * :func:`segment_loads_np` — tangents, stretched lengths, Morison drag, drag damping, added mass (2.2–2.3, 5.2)
 * :func:`node_assembly_np` — node mass matrices, damping matrices, non-tension forces (2.2–2.3, point bodies)
 * :func:`body_loads_np`, :func:`body_mass_blocks_np` — rigid-body loads and mass blocks (3.2–3.3)
-* :func:`tension_matrix_np`, :func:`solve_tension_np` — the tension system K = −J as scipy.sparse (5.4–5.6)
+* :func:`tension_matrix_np`, :func:`solve_tension_np` — the tension system K = −J as scipy.sparse (5.4–5.6);
+  :func:`blocks_to_sparse` converts the kernel's storage (``kd``, ``kb``) for comparison
 * :func:`houbolt_step_np` — one full Houbolt step with the Newton iteration (5.1–5.2, 3.4, 9), with
-  :func:`geometric_stiffness_np` and :func:`rotational_stiffness_np` (convergence aids of the kernel)
+  :func:`geometric_stiffness_np`, :func:`translational_damping_np` and :func:`rotational_stiffness_np`
+  (convergence aids of the kernel)
 * :func:`thesis_shooting_recursion` — the thesis's printed recursion (4.38)–(4.40), *as published*; unstable,
   kept only to document why it is not used (model.md 5.6)
 """
@@ -241,11 +248,10 @@ def body_loads_np(sys, b, lam, vbody, omega, cur_global):
 
     * weight m g_b at r_G and buoyancy −ρV g_b at r_B, g_b = Λ (0, 0, −g);
     * hydrodynamics from the relative velocity of the centroid v_r = v + ω×r_B − Λ V_c, |v_r| = V:
-      incidences θ_v = atan2(−w_r, u_r) (positive when the flow meets the underside) and
-      θ_h = atan2(−v_r, u_r) (positive when the flow meets the starboard side); drag
+      incidences θ_v = atan2(w_r, u_r) and θ_h = atan2(v_r, u_r) (docs/scene-format.md); drag
       ½ρAV² (C_d,v(θ_v) + C_d,h(θ_h) − C_d,v(0))⁺ along −v_r; lift ½ρAV² C_L(θ_v) ⊥ v_r in x′z′ toward +z′;
       side force ½ρAV² C_Y(θ_h) ⊥ v_r in x′y′ toward +y′; weathervane moments ½ρAlV² C_m turning the nose
-      toward v_r (+M_y′ for θ_v > 0, −M_z′ for θ_h > 0);
+      toward v_r (θ_v > 0: v_r above the nose, nose-up = −M_y′; θ_h > 0: v_r to port, +M_z′);
     * rotational damping −½ρA l² V C_lin ω − ½ρA C_quad l³/32 ω|ω| per axis.
 
     Returns (f (3,), m (3,), bdiag) with ``bdiag = ½ρAV(2C_d + dC_L/dα)`` the isotropic drag-derivative
@@ -266,8 +272,8 @@ def body_loads_np(sys, b, lam, vbody, omega, cur_global):
     bdiag = 0.0
     if V > 1e-9:
         u_r, vv_r, w_r = v_r
-        th_v = math.degrees(math.atan2(-w_r, u_r))
-        th_h = math.degrees(math.atan2(-vv_r, u_r))
+        th_v = math.degrees(math.atan2(w_r, u_r))
+        th_h = math.degrees(math.atan2(vv_r, u_r))
         nv, nh = sys.btab_n[b]
         tab = sys.btab[b]
         inc_v, inc_h = tab[0, :nv], tab[4, :nh]
@@ -277,9 +283,10 @@ def body_loads_np(sys, b, lam, vbody, omega, cur_global):
         q = qa * V * V
         tv, th = math.radians(th_v), math.radians(th_h)
         f = f - q * cd * v_r / V
-        f = f + q * cl_v * np.array([math.sin(tv), 0.0, math.cos(tv)])
-        f = f + q * cy_h * np.array([math.sin(th), math.cos(th), 0.0])
-        m = m + q * L * np.array([0.0, cm_v, -cm_h])
+        e_lift = np.array([-math.sin(tv), 0.0, math.cos(tv)])      # ⊥ (cos θ_v, 0, sin θ_v), toward +z′
+        e_side = np.array([-math.sin(th), math.cos(th), 0.0])      # ⊥ (cos θ_h, sin θ_h, 0), toward +y′
+        f = f + q * cl_v * e_lift + q * cy_h * e_side
+        m = m + q * L * np.array([0.0, -cm_v, cm_h])
         bdiag = qa * V * (2.0 * cd + P["lift_slope"])
     m = m - (qa * L * L * V * P["rot_lin"] * omega + qa * P["rot_quad"] * L ** 3 / 32.0 * omega * np.abs(omega))
     return f, m, bdiag
@@ -328,7 +335,9 @@ def tension_matrix_np(sys, tang, minv, dt):
     From the general rule J[i, s] = −Σ_a σ_{a,i} σ_{a,s} t_i·(½Δt² M̃_a⁻¹ t_s) − δ_is l_i/EA_i over the
     FREE nodes a shared by segments i and s:  K = ½Δt² C M̃⁻¹ Cᵀ + diag(l/EA), with C from
     :func:`constraint_gradient` and ``minv`` (N, 3, 3) the inverses of the node matrices M̃ (only FREE
-    nodes are used). The tangents of the rows are the coefficient tangents, so K is exactly symmetric.
+    nodes are used). The rows use the coefficient tangents, so K is symmetric (and positive definite)
+    whenever every M̃ is symmetric positive definite (model.md 5.6); a non-symmetric M̃ (a rigid body's full
+    hydrodynamic damping) gives the corresponding non-symmetric K.
     """
     nn = sys.node_kind.shape[0]
     C = constraint_gradient(sys, tang)
@@ -484,6 +493,20 @@ def rotational_stiffness_np(sys, b, ang, v_node, omega, cur_global, m0, eps_angl
     return out
 
 
+def translational_damping_np(sys, b, lam, vbody, omega, cur_global, f0):
+    """D = −∂F/∂v (3×3, body axes, generally non-symmetric: lift) of the body force about the force ``f0``
+    at ``vbody``, by forward differences with step 1e-6 (1 + |v|)."""
+    vbody = np.asarray(vbody, float)
+    eps = 1e-6 * (1.0 + float(np.linalg.norm(vbody)))
+    D = np.zeros((3, 3))
+    for j in range(3):
+        v2 = vbody.copy()
+        v2[j] += eps
+        f, _, _ = body_loads_np(sys, b, lam, v2, omega, cur_global)
+        D[:, j] = -(f - f0) / eps
+    return D
+
+
 def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     """Twin of ``kernels.houbolt_step``: one Houbolt step (model.md 5.1–5.2) on copies of the state.
 
@@ -497,8 +520,10 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
        tail-cable reaction, Coriolis/centripetal terms, and the condensation of each rigid body onto its
        tow-point node: A_eff = A_tt − A_tr A_rr⁻¹ A_rt, f_eff = F − A_tr A_rr⁻¹ M, added as Λᵀ A_eff Λ and
        Λᵀ f_eff (model.md 3.4);
-    2. the linearisation L = (11Δt/12) B + ½Δt² K_g (implicit drag, 5.2, plus the node's own string
-       stiffness K_g, :func:`geometric_stiffness_np`), M̃ = M + L, and the node-local affine map
+    2. the linearisation L = (11Δt/12) B + ½Δt² K_g (implicit drag, 5.2 — at a rigid body's node B also
+       holds Λᵀ D Λ with the body's full damping D = −∂F/∂v, :func:`translational_damping_np`, evaluated at
+       the first iterate — plus the node's own string stiffness K_g, :func:`geometric_stiffness_np`),
+       M̃ = M + L, and the node-local affine map
        r_a(T) = M̃⁻¹[M (2.5r^t − 2r^{t−1} + 0.5r^{t−2}) + L r* + ½Δt² (F_o + Σ σ T t)];
     3. residuals g = ℓ − l(1 + T/EA) at r(T), the tension matrix K = −J (coefficient tangents), slack
        segments (T ≤ 0 and g < 0) held at T = 0 by identity rows, K δT = g, T ← max(T + δT, 0) (5.3–5.6, 9);
@@ -512,8 +537,8 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     The linearisations in 2 and the relaxation in 4 change the convergence rate only, not the converged
     solution; they are reproduced here so that the iterates match the kernel's.
 
-    If ``trace`` is a list, a dict of the iterate (positions, tensions, angles, max|δT|) is appended to it
-    after every iteration (for debugging).
+    If ``trace`` is a list, a dict of the iterate (positions, tensions, angles, max|δT|, and the tension
+    system: coefficient tangents, M̃⁻¹, K, right-hand side, δT) is appended to it after every iteration.
     """
     sys = sim_like.system
     settings = _settings_array(sim_like.settings)
@@ -545,6 +570,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     compliance = np.where(np.isinf(ea), 0.0, sys.l0 / np.where(np.isinf(ea), 1.0, ea))
 
     relax = np.zeros((nb, 6))       # per body: rotational stiffness k_θ (3) and damping c_ω (3)
+    bdamp = np.zeros((nb, 3, 3))    # per body: translational damping D = −∂F/∂v (body axes)
     status = FAIL_NEWTON
     it = 0
     maxd = 0.0
@@ -563,9 +589,10 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             w = euler_rates_to_omega_np(angs[b], dang)
             z_centroid = rs[a, 2] + (lam.T @ P["r_B"])[2]
             cur = current_np(z_centroid, sys.cur_z, sys.cur_v)
-            F, M, bd = body_loads_np(sys, b, lam, lam @ vs[a], w, cur)
+            F, M, _ = body_loads_np(sys, b, lam, lam @ vs[a], w, cur)
             if it == 1:
                 relax[b] = rotational_stiffness_np(sys, b, angs[b], vs[a], w, cur, M)
+                bdamp[b] = translational_damping_np(sys, b, lam, lam @ vs[a], w, cur, F)
             c = sys.body_aft_node[b]
             if c >= 0:
                 tail = lam @ node_reaction_np(sys, c, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
@@ -581,7 +608,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             f_eff = F - A_tr @ y
             mnode[a] += lam.T @ A_eff @ lam
             fnode[a] += lam.T @ f_eff
-            bnode[a] += bd * _I3
+            bnode[a] += lam.T @ bdamp[b] @ lam
             body.append((lam, dang, w, X, y, np.diag(A_rr).copy()))
         # 2. node-local affine map r(T)
         lin = c11 * bnode + hdt2 * geometric_stiffness_np(sys, seg, tens)
@@ -642,7 +669,8 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         angs = new_angs
         rs = place_aft_nodes_np(sys, rs, angs)
         if trace is not None:
-            trace.append(dict(r=rs.copy(), tens=tens.copy(), angs=angs.copy(), max_dT=maxd, dang_max=dang_max))
+            trace.append(dict(r=rs.copy(), tens=tens.copy(), angs=angs.copy(), max_dT=maxd, dang_max=dang_max,
+                              tang=seg.tang.copy(), minv=minv.copy(), K=K, rhs=rhs.copy(), dT=dT.copy()))
         # 5. convergence
         if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
             status = OK

@@ -1,0 +1,218 @@
+"""Command-line interface: ``towenv scenes`` and ``towenv simulate SCENE``.
+
+    towenv scenes
+    towenv simulate two_part_tow_1 --duration 120 --out out/tpt1 --set vessel.speed=2.5
+
+``simulate`` writes ``result.npz``, ``timeseries.csv``, ``summary.md``, ``summary.json`` and five PNG plots
+into the output folder. Scene and divergence errors print one line to stderr and exit with code 2.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import shutil
+import sys
+import textwrap
+import tomllib
+from pathlib import Path
+
+__all__ = ["main", "build_parser", "parse_override"]
+
+EXIT_ERROR = 2
+
+
+# ---------------------------------------------------------------------------------------------------
+# argument helpers
+# ---------------------------------------------------------------------------------------------------
+def parse_value(text: str):
+    """A ``--set`` value: a TOML literal (``2.5``, ``true``, ``"x"``, ``[1, 2]``, ``{a = 1}``), else JSON,
+    else the raw text as a string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except (tomllib.TOMLDecodeError, KeyError):
+        pass
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def parse_override(text: str) -> tuple[str, object]:
+    """``key=value`` -> ``(key, parsed value)`` (dotted scene path or solver setting)."""
+    key, sep, value = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected key=value (e.g. vessel.speed=2.5), got {text!r}")
+    return key, parse_value(value.strip())
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"must be > 0 (got {text})")
+    return v
+
+
+def _nonnegative(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (v >= 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"must be >= 0 (got {text})")
+    return v
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="towenv", description="towenv: dynamic simulator of underwater towed systems.")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    ps = sub.add_parser("scenes", help="list the embedded scenes", description="List the embedded scenes.")
+    ps.set_defaults(func=cmd_scenes)
+
+    pm = sub.add_parser(
+        "simulate", help="simulate a scene and write results, summary and plots",
+        description="Simulate a scene and write result.npz, timeseries.csv, summary.md/json and PNG plots.",
+        epilog="examples:\n  towenv simulate two_part_tow_1 --duration 120\n"
+               "  towenv simulate my_scene.toml --set vessel.speed=2.5 --set 'bodies[fish].mass=45' --dt 0.01",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    pm.add_argument("scene", metavar="SCENE", help="embedded scene name (see `towenv scenes`) or path to a TOML file")
+    pm.add_argument("--duration", type=_positive, default=120.0, help="simulated time in s (default 120)")
+    pm.add_argument("--out", metavar="DIR", default=None, help="output folder (default ./out/<scene>)")
+    pm.add_argument("--dt", type=_positive, default=None, help="time step in s (overrides solver.dt)")
+    pm.add_argument("--discard", type=_nonnegative, default=None, metavar="SECONDS",
+                    help="start-up window left out of the statistics (default max(ramp, 0.25 duration))")
+    pm.add_argument("--set", dest="overrides", action="append", type=parse_override, default=[],
+                    metavar="KEY=VALUE",
+                    help="scene override by dotted path, value as a TOML/JSON literal (repeatable), "
+                         "e.g. vessel.speed=2.5, lines.primary.length=90, solver.max_iterations=40")
+    pm.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    pm.add_argument("--quiet", "-q", action="store_true",
+                    help="no progress bar or summary table; print only the output folder")
+    pm.set_defaults(func=cmd_simulate)
+    return p
+
+
+def _one_line(exc: BaseException) -> str:
+    """An exception message on one line (multi-problem scene errors joined with '; ')."""
+    parts = [s.strip() for s in str(exc).splitlines() if s.strip()]
+    if len(parts) > 1 and parts[0].endswith(":"):
+        return parts[0] + " " + "; ".join(parts[1:])
+    return "; ".join(parts) or type(exc).__name__
+
+
+def _error(msg: str) -> int:
+    print(f"towenv: error: {msg}", file=sys.stderr)
+    return EXIT_ERROR
+
+
+# ---------------------------------------------------------------------------------------------------
+# commands
+# ---------------------------------------------------------------------------------------------------
+def cmd_scenes(args) -> int:
+    from .scene import DEFAULT_SCENE, list_scenes
+    scenes = list_scenes()
+    if not scenes:
+        print("no embedded scenes found")
+        return 0
+    width = max(60, min(shutil.get_terminal_size((110, 20)).columns, 140))
+    nw = max(len(n) for n in scenes) + 2
+    rows = [("SCENE", "DESCRIPTION")] + [(n + (" *" if n == DEFAULT_SCENE else ""), d or "-")
+                                         for n, d in scenes.items()]
+    nw = max(nw, max(len(r[0]) for r in rows))
+    for i, (n, d) in enumerate(rows):
+        wrapped = textwrap.wrap(d, width=max(30, width - nw - 2)) or [""]
+        print(f"{n:<{nw}}  {wrapped[0]}")
+        for cont in wrapped[1:]:
+            print(f"{'':<{nw}}  {cont}")
+        if i == 0:
+            print(f"{'-' * nw}  {'-' * min(len('DESCRIPTION') + 20, width - nw - 2)}")
+    print(f"\n* default scene. Run one with: towenv simulate {DEFAULT_SCENE} --duration 120")
+    return 0
+
+
+def _out_name(scene_arg: str, scene) -> str:
+    from .scene import list_scenes
+    if scene_arg in list_scenes():
+        name = scene_arg
+    else:
+        name = Path(scene_arg).stem or getattr(scene, "name", "run")
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "run"
+
+
+def cmd_simulate(args) -> int:
+    from .core.result import Result  # noqa: F401  (import check)
+    from .core.run import simulate
+    from .core.simulator import Simulator
+    from .errors import SimulationDivergence
+    from .report import default_discard, summarize, summary_markdown, write_timeseries_csv
+    from .scene import SceneError
+
+    overrides = dict(args.overrides)
+    if args.dt is not None:
+        overrides["dt"] = args.dt
+    try:
+        sim = Simulator(args.scene, **overrides)
+    except SceneError as exc:
+        return _error(_one_line(exc))
+    except SimulationDivergence as exc:       # the initial static solution can fail too
+        return _error(_one_line(exc))
+
+    duration = float(args.duration)
+    discard = default_discard(sim.scene, duration) if args.discard is None else float(args.discard)
+    if discard >= duration:
+        return _error(f"--discard ({discard:g} s) must be shorter than --duration ({duration:g} s)")
+    out = Path(args.out) if args.out else Path("out") / _out_name(args.scene, sim.scene)
+
+    if not args.quiet:
+        print(f"simulating {sim.scene.name!r} for {duration:g} s (dt = {sim.dt:g} s)"
+              + (f" with {', '.join(f'{k}={v!r}' for k, v in overrides.items())}" if overrides else ""),
+              file=sys.stderr)
+    try:
+        res = simulate(sim, duration, progress=not args.quiet)
+    except SimulationDivergence as exc:
+        return _error(_one_line(exc))
+    res.meta["scene"] = sim.scene.name
+    if overrides:
+        res.meta["overrides"] = {k: v for k, v in overrides.items()}
+    res.meta["discard"] = discard
+
+    out.mkdir(parents=True, exist_ok=True)
+    res.save(out / "result.npz")
+    write_timeseries_csv(res, out / "timeseries.csv")
+    summary = summarize(res, discard)
+    if overrides:
+        summary["overrides"] = {k: v for k, v in overrides.items()}
+    md = summary_markdown(summary, title=sim.scene.name)
+    (out / "summary.md").write_text(md, encoding="utf-8")
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n",
+                                      encoding="utf-8")
+    if not args.no_plots:
+        from .plots import save_all
+        mean, heading, _ = sim.path.mean_path(res.t)
+        save_all(res, out, discard=discard, track=(mean, heading))
+
+    if not args.quiet:
+        print(md)
+    print(f"output written to {out.resolve()}")
+    return 0
+
+
+# ---------------------------------------------------------------------------------------------------
+def main(argv=None) -> int:
+    """Entry point of the ``towenv`` command; returns the exit code (0 ok, 2 on errors)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return EXIT_ERROR
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
