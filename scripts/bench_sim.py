@@ -126,6 +126,15 @@ def main(argv=None):
                 e = ", ".join(f"{b}: heave {100 * v[0]:.2f} %, pitch {100 * v[1]:.2f} %" for b, v in r["err"].items())
             print(f"| {scene} | {r['nodes']} | {r['dt']} | {r['rtf']:.0f}× | {r['iters']:.2f} | {r['cuts']} | {e} |",
                   flush=True)
+    for scene in ("two_part_tow_1", "ablow_turn_1km"):
+        sim = towenv.Simulator(scene)
+        snap = sim.snapshot()
+        times = []
+        for _ in range(1000):
+            t0 = time.perf_counter()
+            sim.restore(snap)
+            times.append(time.perf_counter() - t0)
+        print(f"\nsnapshot restore, {scene} ({sim.system.n_nodes} nodes): median {1e6 * statistics.median(times):.1f} µs")
     print(f"\nreference: Δt = smallest Δt / 8, Newton tolerance / 100; duration per scene as in DEFAULT; "
           f"real-time factor = median of {args.repeats} runs")
 

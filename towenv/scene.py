@@ -952,7 +952,7 @@ class Solver(_Model):
     dt: Num(ge=1e-5, le=1, unit="s") = 0.02
     tolerance: Num(gt=0, unit="N") = 0.5
     relative_tolerance: Num(ge=0, lt=1) = 1e-5
-    angle_tolerance: Num(gt=0, unit="rad") = 1e-6
+    angle_tolerance: Num(gt=0, unit="rad") = 1e-5
     max_iterations: Int(ge=1) = 25
     max_step_cuts: Int(ge=0) = 4
     max_strain: Num(gt=0) = 0.2

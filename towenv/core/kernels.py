@@ -547,16 +547,15 @@ def node_reaction(c, r, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, t
 
 
 @njit(cache=True)
-def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0, bkc):
+def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0, bkc, scr, lam):
     """Diagonal estimates of −∂M_i/∂θ_i (stiffness) and −∂M_i/∂ω_i (damping) of the body loads, by
     finite differences, clipped at zero. Used only to relax the body-angle update (convergence rate)."""
-    lam = np.empty((3, 3))
-    vb = np.empty(3)
-    f = np.empty(3)
-    m = np.empty(3)
-    bd = np.empty(1)
-    ang2 = np.empty(3)
-    w2 = np.empty(3)
+    vb = scr[0]
+    f = scr[1]
+    m = scr[2]
+    bd = scr[3]
+    ang2 = scr[4]
+    w2 = scr[5]
     eps_a = 1e-5
     eps_w = 1e-4
     for i in range(3):
@@ -580,13 +579,13 @@ def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0,
 
 
 @njit(cache=True)
-def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0, out):
+def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0, out, scr):
     """D = −∂F/∂v of the body's hydrodynamic force (body axes) by finite differences. Used only as the
     implicit-damping linearisation of the tow-point node (convergence rate, not the solution)."""
-    f = np.empty(3)
-    m = np.empty(3)
-    bd = np.empty(1)
-    v2 = np.empty(3)
+    f = scr[1]
+    m = scr[2]
+    bd = scr[3]
+    v2 = scr[4]
     vmag = math.sqrt(vbody[0] ** 2 + vbody[1] ** 2 + vbody[2] ** 2)
     eps = 1e-6 * (1.0 + vmag)
     for j in range(3):
@@ -618,7 +617,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     hist_r, hist_ang, tens_hist, top_react = state
     (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
      gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
-     fb, mb, bdiag, react, bkc, bdmat) = ws
+     fb, mb, bdiag, react, bkc, bdmat, scr) = ws
 
     nn = node_kind.shape[0]
     ns = l0.shape[0]
@@ -673,8 +672,8 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             current_at(zc, cur_z, cur_v, cur_b)
             body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
             if it == 1:
-                _rotational_stiffness(b, angs[b], vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc)
-                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b])
+                _rotational_stiffness(b, angs[b], vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33)
+                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr)
             c = body_aft_node[b]
             if c >= 0:
                 node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,

@@ -48,7 +48,7 @@ class SolverSettings:
     max_step_cuts: int = 4
     max_strain: float = 0.2
     settle_time: float = 0.0
-    angle_tolerance: float = 1e-6
+    angle_tolerance: float = 1e-5
 
     def array(self):
         return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
@@ -107,7 +107,7 @@ class Simulator:
                     np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros(3), np.zeros(3), np.zeros((3, 3)),
                     np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                     np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3), np.zeros((max(nb, 1), 9)),
-                    np.zeros((max(nb, 1), 3, 3)))
+                    np.zeros((max(nb, 1), 3, 3)), np.zeros((6, 3)))
         self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)))
         self.counters = np.zeros(4, np.int64)
         self._args = (s.top_node, s.topo(), s.segp(), s.bodyp(), s.env())
