@@ -960,6 +960,65 @@ class Solver(_Model):
 
 
 # =====================================================================================================
+# Heave compensator and winch
+# =====================================================================================================
+class Compensator(_Model):
+    """Heave compensator between the vessel sheave and the cable top (Hover et al. §IV-A): spring k,
+    damper b, apparent mass m moving with the top node, stroke limits with stiff end stops. ``mode``:
+    ``passive`` (k, b changeable at run time within the bounds: semi-active), ``locked``, ``position``
+    (commanded sheave position, first-order lag + rate limit) or ``force`` (commanded force, same)."""
+    mode: _choice("passive", "locked", "position", "force") = "passive"
+    stiffness: Num(ge=0, unit="N/m") = 0.0
+    damping: Num(ge=0, unit="N s/m") = 0.0
+    mass: Num(ge=0, unit="kg") = 0.0
+    stroke: Num(gt=0, unit="m") = 2.0
+    end_stop_stiffness: Num(gt=0, unit="N/m") = 1.0e7
+    end_stop_damping: Num(ge=0, unit="N s/m") = 1.0e5
+    stiffness_bounds: tuple[Num(ge=0, unit="N/m"), Num(ge=0, unit="N/m")] = (0.0, 1.0e6)
+    damping_bounds: tuple[Num(ge=0, unit="N s/m"), Num(ge=0, unit="N s/m")] = (0.0, 1.0e6)
+    actuator_time_constant: Num(gt=0, unit="s") = 0.2
+    rate_limit: Num(gt=0) = 1.0
+
+    @model_validator(mode="after")
+    def _check(self):
+        probs = []
+        for name in ("stiffness", "damping"):
+            lo, hi = getattr(self, f"{name}_bounds")
+            if lo > hi:
+                probs.append((f"{name}_bounds", f"lower bound must be <= upper bound (got [{lo}, {hi}])"))
+            elif not lo <= getattr(self, name) <= hi:
+                probs.append((name, f"must lie within {name}_bounds [{lo:g}, {hi:g}] (got {getattr(self, name)!r})"))
+        if probs:
+            _problems(*probs)
+        return self
+
+
+class Winch(_Model):
+    """Winch at the top of ``line`` (default: the line attached to the vessel). Payout is positive.
+    ``mode``: ``speed`` (payout speed command, m/s) or ``constant_tension`` (pay out above
+    ``set_tension``, haul in below, speed = gain × (T − set_tension) outside a deadband)."""
+    line: Name | None = None
+    mode: _choice("speed", "constant_tension") = "speed"
+    speed: Num(unit="m/s") = 0.0
+    max_speed: Num(gt=0, unit="m/s") = 1.0
+    max_acceleration: Num(gt=0, unit="m/s^2") = 0.5
+    min_length: Num(gt=0, unit="m") | None = None
+    max_length: Num(gt=0, unit="m") | None = None
+    nominal_segment_length: Num(gt=0, unit="m") | None = None
+    set_tension: Num(ge=0, unit="N") = 0.0
+    gain: Num(ge=0, unit="m/s/N") = 1.0e-4
+    deadband: Num(ge=0, unit="N") = 0.0
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.min_length is not None and self.max_length is not None and self.min_length > self.max_length:
+            _problems(("min_length", f"must be <= max_length ({self.max_length:g} m) (got {self.min_length!r})"))
+        if abs(self.speed) > self.max_speed:
+            _problems(("speed", f"must be within ±max_speed = ±{self.max_speed:g} m/s (got {self.speed!r})"))
+        return self
+
+
+# =====================================================================================================
 # Scene
 # =====================================================================================================
 class Scene(_Model):
@@ -971,6 +1030,8 @@ class Scene(_Model):
     vessel: Vessel = Vessel()
     lines: tuple[Line, ...] = Field(min_length=1)
     bodies: tuple[Body, ...] = ()
+    compensator: Compensator | None = None
+    winch: Winch | None = None
     solver: Solver = Solver()
 
     _source_dir: str | None = PrivateAttr(default=None)
@@ -1103,6 +1164,30 @@ class Scene(_Model):
                         probs.append((f"lines[{i}].segments",
                                       f"must list one count per span: line {ln.name!r} has {n} span"
                                       f"{'s' if n != 1 else ''}{where} (got {len(ln.segments)} entries)"))
+        if not probs and self.winch is not None:
+            roots_names = [ln.name for ln in lines if ln.top_kind == "vessel"]
+            wl = self.winch.line or (roots_names[0] if roots_names else None)
+            if wl not in line_idx:
+                probs.append(("winch.line", f"unknown line {wl!r}; known lines: {known_lines}"))
+            else:
+                ln = lines[line_idx[wl]]
+                if ln.top_kind != "vessel":
+                    probs.append(("winch.line", f"the winch must sit at the top of a line attached to the vessel "
+                                                f"(line {wl!r} hangs from {ln.top_kind})"))
+                elif self._junction_distances(wl):
+                    d = min(self._junction_distances(wl))
+                    probs_d = ln.length - d
+                    if self.winch.min_length is not None and self.winch.min_length <= probs_d:
+                        probs.append(("winch.min_length",
+                                      f"line {wl!r} carries a junction {d:g} m below its top: min_length must "
+                                      f"be > {probs_d:g} m so the winch never reels in past it "
+                                      f"(got {self.winch.min_length!r})"))
+                if self.winch.max_length is not None and self.winch.max_length < ln.length:
+                    probs.append(("winch.max_length", f"must be >= the initial length {ln.length:g} m "
+                                                      f"(got {self.winch.max_length!r})"))
+                if self.winch.min_length is not None and self.winch.min_length > ln.length:
+                    probs.append(("winch.min_length", f"must be <= the initial length {ln.length:g} m "
+                                                      f"(got {self.winch.min_length!r})"))
         if probs:
             _problems(*probs)
         return self

@@ -44,6 +44,18 @@ FREE = 0
 PRESCRIBED_TOP = 1
 PRESCRIBED_AFT = 2
 PRESCRIBED_FIXED = 3   # anchor: fixed in space
+COMPENSATOR = 4        # cable top node on a heave-compensator sheave: moves with the ship except along z
+NEED_REMESH = 10       # advance(): not a failure — the winch line needs a node inserted/removed
+
+# heave compensator parameter layout (float64[16])
+C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_KSTOP, C_BSTOP, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
+# compensator state layout (float64[8]): hits, in-contact flag, max penetration, actuator state
+CS_HITS, CS_CONTACT, CS_PEN, CS_ACT = range(4)
+COMP_PASSIVE, COMP_LOCKED, COMP_POSITION, COMP_FORCE = 1, 2, 3, 4
+# winch parameter layout (float64[12]) and state (float64[4])
+W_MODE, W_VCMD, W_VMAX, W_AMAX, W_LMIN, W_LMAX, W_TSET, W_GAIN, W_DEADBAND, W_SEG, W_LNOM = range(11)
+WS_V, WS_LEN, WS_PAID = range(3)
+WINCH_SPEED, WINCH_TENSION = 1, 2
 
 
 # ----------------------------------------------------------------------------------------------
@@ -436,7 +448,7 @@ def assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qve
         for k1 in range(ns):
             for k2 in range(ns):
                 kb[a, k1, k2] = 0.0
-        if node_kind[a] != FREE:
+        if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
             continue
         for k1 in range(ns):
             s1 = node_segs[a, k1]
@@ -469,7 +481,7 @@ def tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs,
         if not (d > 0.0):
             return False
         a = seg_up[p]
-        if node_kind[a] != FREE:
+        if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
             continue
         kp = seg_uplocal[p]
         ns = node_nseg[a]
@@ -492,7 +504,7 @@ def tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs,
         p = order[ip]
         acc = rhs[p]
         a = seg_up[p]
-        if node_kind[a] == FREE:
+        if node_kind[a] == FREE or node_kind[a] == COMPENSATOR:
             kp = seg_uplocal[p]
             for k in range(node_nseg[a]):
                 q = node_segs[a, k]
@@ -579,6 +591,75 @@ def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0,
 
 
 @njit(cache=True)
+def _compensator_node(a, ship, comp, cmode, act, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, tang, stretched,
+                      tens, mnode, bnode, fnode, acon, qvec):
+    """Heave-compensator sheave (model.md 2.7, Hover §IV-A): the cable's top node moves with the ship
+    tow point except along e_c = e_z, where its stroke z obeys
+
+        m_eff z̈ = e·(Σ σ T t + F_o) − k z − b ż + F_pre − e·M_n a_ship − m_c a_ship,z  (+ end stops),
+        m_eff = m_c + e·M_n e,
+
+    F_pre being the preload that holds the static cable force at mid-stroke (Hover's model is linear
+    about the mean). Houbolt gives z = A_c + Σ σ T q_k, written into ``acon``/``qvec`` in the same form
+    as a free node, so the tension Jacobian picks up the compensator term by the general rule.
+    Locked and position-controlled sheaves are prescribed (q = 0)."""
+    idt2 = 1.0 / (dt * dt)
+    z_t = r_t[a, 2] - r_t[ship, 2]
+    z_tm1 = r_tm1[a, 2] - r_tm1[ship, 2]
+    z_tm2 = r_tm2[a, 2] - r_tm2[ship, 2]
+    ns = node_nseg[a]
+    if cmode == COMP_LOCKED or cmode == COMP_POSITION:
+        znew = z_t if cmode == COMP_LOCKED else act
+        for i in range(3):
+            acon[a, i] = rs[ship, i]
+        acon[a, 2] += znew
+        for k in range(ns):
+            for i in range(3):
+                qvec[a, k, i] = 0.0
+        return
+    a_ship0 = (2.0 * rs[ship, 0] - 5.0 * r_t[ship, 0] + 4.0 * r_tm1[ship, 0] - r_tm2[ship, 0]) * idt2
+    a_ship1 = (2.0 * rs[ship, 1] - 5.0 * r_t[ship, 1] + 4.0 * r_tm1[ship, 1] - r_tm2[ship, 1]) * idt2
+    a_ship2 = (2.0 * rs[ship, 2] - 5.0 * r_t[ship, 2] + 4.0 * r_tm1[ship, 2] - r_tm2[ship, 2]) * idt2
+    m_eff = comp[C_MASS] + mnode[a, 2, 2]
+    h_z = 2.5 * z_t - 2.0 * z_tm1 + 0.5 * z_tm2
+    zd_hist = (-18.0 * z_t + 9.0 * z_tm1 - 2.0 * z_tm2) / (6.0 * dt)
+    c116 = 11.0 / (6.0 * dt)
+    z_star = rs[a, 2] - rs[ship, 2]
+    kk = comp[C_K]
+    bb = comp[C_B]
+    rhs = 2.0 * m_eff * h_z * idt2 - bb * zd_hist + comp[C_PRELOAD]
+    if cmode == COMP_FORCE:
+        rhs += act
+    # end stops (stiff spring-dampers), active at the current iterate
+    if z_star > comp[C_SMAX]:
+        kk += comp[C_KSTOP]
+        bb += comp[C_BSTOP]
+        rhs += comp[C_KSTOP] * comp[C_SMAX] - comp[C_BSTOP] * zd_hist
+    elif z_star < comp[C_SMIN]:
+        kk += comp[C_KSTOP]
+        bb += comp[C_BSTOP]
+        rhs += comp[C_KSTOP] * comp[C_SMIN] - comp[C_BSTOP] * zd_hist
+    # loads on the node along e, the ship-acceleration (transport) terms, implicit drag and string stiffness
+    beb = bnode[a, 2, 2]
+    kg = 0.0
+    for k in range(ns):
+        sk = node_segs[a, k]
+        if stretched[sk] > 0.0:
+            kg += tens[sk] / stretched[sk] * (1.0 - tang[sk, 2] * tang[sk, 2])
+    rhs += fnode[a, 2] - (mnode[a, 2, 0] * a_ship0 + mnode[a, 2, 1] * a_ship1 + mnode[a, 2, 2] * a_ship2) \
+        - comp[C_MASS] * a_ship2 + (c116 * beb + kg) * z_star
+    d = 2.0 * m_eff * idt2 + kk + c116 * (bb + beb) + kg
+    for i in range(3):
+        acon[a, i] = rs[ship, i]
+    acon[a, 2] += rhs / d
+    for k in range(ns):
+        s = node_segs[a, k]
+        qvec[a, k, 0] = 0.0
+        qvec[a, k, 1] = 0.0
+        qvec[a, k, 2] = tang[s, 2] / d
+
+
+@njit(cache=True)
 def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0, out, scr):
     """D = −∂F/∂v of the body's hydrodynamic force (body axes) by finite differences. Used only as the
     implicit-damping linearisation of the tow-point node (convergence rate, not the solution)."""
@@ -598,7 +679,7 @@ def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0
 
 
 @njit(cache=True)
-def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws):
+def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
     On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
@@ -614,7 +695,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     maxit = int(settings[2])
     max_strain = settings[3]
     ang_tol = settings[4]
-    hist_r, hist_ang, tens_hist, top_react = state
+    hist_r, hist_ang, tens_hist, top_react, cstate = state
     (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
      gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
      fb, mb, bdiag, react, bkc, bdmat, scr) = ws
@@ -629,6 +710,18 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     hdt2 = 0.5 * dt * dt
     i6dt = 1.0 / (6.0 * dt)
     idt2 = 1.0 / (dt * dt)
+
+    cmode = int(comp[C_MODE])
+    cnode = int(comp[C_NODE])
+    act_new = cstate[CS_ACT]
+    if cmode == COMP_POSITION or cmode == COMP_FORCE:
+        # first-order actuator lag with a rate limit (explicit, once per step)
+        rate = (comp[C_CMD] - cstate[CS_ACT]) / max(comp[C_TAU], dt)
+        if rate > comp[C_RATE]:
+            rate = comp[C_RATE]
+        elif rate < -comp[C_RATE]:
+            rate = -comp[C_RATE]
+        act_new = cstate[CS_ACT] + dt * rate
 
     # predictor
     for a in range(nn):
@@ -746,6 +839,10 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                     bnode[a, i, j] += sacc
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
         for a in range(nn):
+            if node_kind[a] == COMPENSATOR:
+                _compensator_node(a, int(comp[C_SHIP]), comp, cmode, act_new, dt, rs, r_t, r_tm1, r_tm2, node_nseg,
+                                  node_segs, tang, stretched, tens, mnode, bnode, fnode, acon, qvec)
+                continue
             if node_kind[a] != FREE:
                 continue
             # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
@@ -777,7 +874,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                                             + tmp33b[i, 2] * tang[s, 2])
         # positions at the current tensions, and residuals
         for a in range(nn):
-            if node_kind[a] != FREE:
+            if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
                 continue
             for i in range(3):
                 x = acon[a, i]
@@ -832,7 +929,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             return FAIL_NAN, it, elem, maxd
         # positions with the updated tensions (same coefficients)
         for a in range(nn):
-            if node_kind[a] != FREE:
+            if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
                 continue
             for i in range(3):
                 x = acon[a, i]
@@ -878,9 +975,25 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         for i in range(3):
             if not math.isfinite(rs[a, i]):
                 return FAIL_NAN, it, a, maxd
-    # reaction on the vessel at the converged state (coefficients of the last iterate)
-    node_reaction(top_node, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
+    # reaction at the cable's top (the vessel tow point, or the compensator sheave) at the converged
+    # state (coefficients of the last iterate)
+    rnode = cnode if cmode > 0 else top_node
+    node_reaction(rnode, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
                   mnode, fnode, react)
+    if cmode > 0:
+        z = rs[cnode, 2] - rs[top_node, 2]
+        pen = z - comp[C_SMAX]
+        if comp[C_SMIN] - z > pen:
+            pen = comp[C_SMIN] - z
+        if pen > 0.0:
+            if cstate[CS_CONTACT] == 0.0:
+                cstate[CS_HITS] += 1.0
+            cstate[CS_CONTACT] = 1.0
+            if pen > cstate[CS_PEN]:
+                cstate[CS_PEN] = pen
+        else:
+            cstate[CS_CONTACT] = 0.0
+        cstate[CS_ACT] = act_new
     for i in range(3):
         top_react[i] = react[i]
     for a in range(nn):
@@ -912,75 +1025,135 @@ def _quad3(y0, ym1, ym2, tau):
 
 
 @njit(cache=True)
-def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, state, ws, saved, counters):
+def _winch_speed(winch, wstate, tens_hist, dt):
+    """Payout speed for the next step (payout > 0): the command (or the constant-tension law), limited
+    in acceleration and speed, and clipped so the deployed length stays within [L_min, L_max]."""
+    mode = int(winch[W_MODE])
+    v = wstate[WS_V]
+    if mode == WINCH_TENSION:
+        err = tens_hist[0, int(winch[W_SEG])] - winch[W_TSET]
+        if abs(err) <= winch[W_DEADBAND]:
+            vcmd = 0.0
+        else:
+            vcmd = winch[W_GAIN] * (err - math.copysign(winch[W_DEADBAND], err))
+    else:
+        vcmd = winch[W_VCMD]
+    dv = vcmd - v
+    amax = winch[W_AMAX] * dt
+    if dv > amax:
+        dv = amax
+    elif dv < -amax:
+        dv = -amax
+    v = v + dv
+    if v > winch[W_VMAX]:
+        v = winch[W_VMAX]
+    elif v < -winch[W_VMAX]:
+        v = -winch[W_VMAX]
+    length = wstate[WS_LEN] + v * dt
+    if length > winch[W_LMAX]:
+        v = (winch[W_LMAX] - wstate[WS_LEN]) / dt
+    elif length < winch[W_LMIN]:
+        v = (winch[W_LMIN] - wstate[WS_LEN]) / dt
+    return v
+
+
+@njit(cache=True)
+def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, state, ws, saved, counters,
+            comp, winch, wstate):
     """Advance ``n_steps`` steps of size ``dt``; ``top_path[k]`` is the vessel tow point at the end of step k.
 
     A step whose Newton iteration fails is retried as 2, 4, … 2^max_cuts sub-steps with the Houbolt
     history re-interpolated quadratically at the new spacing (model.md 5.7). ``counters`` accumulates
-    [steps, iterations, max iterations, step cuts]. Returns (status, failed step index, element, max|δT|).
+    [steps, iterations, max iterations, step cuts]. With a winch, the top segment's unstretched length
+    follows the payout (model.md 2.8); when it leaves [0.5, 1.5]·l_nom the loop stops with
+    ``NEED_REMESH`` after that step so the caller can insert or remove a node.
+    Returns (status, step index (failed, or last done for NEED_REMESH), element, max|δT|).
     """
-    hist_r, hist_ang, tens_hist, top_react = state
-    s_hist_r, s_hist_ang, s_tens = saved
+    hist_r, hist_ang, tens_hist, top_react, cstate = state
+    s_hist_r, s_hist_ang, s_tens, s_cstate = saved
+    l0 = segp[0]
     max_cuts = int(settings[5])
     nn = hist_r.shape[1]
     nb = hist_ang.shape[1]
     ns = tens_hist.shape[1]
     top_sub = np.empty(3)
+    wmode = int(winch[W_MODE])
+    wseg = int(winch[W_SEG])
     for k in range(n_steps):
-        st, it, el, md = houbolt_step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws)
+        dl = 0.0
+        l_old = 0.0
+        v_new = 0.0
+        if wmode > 0:
+            v_new = _winch_speed(winch, wstate, tens_hist, dt)
+            dl = v_new * dt
+            l_old = l0[wseg]
+            l0[wseg] = l_old + dl
+        st, it, el, md = houbolt_step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
         counters[0] += 1
         counters[1] += it
         if it > counters[2]:
             counters[2] = it
-        if st == OK:
-            continue
-        s_hist_r[:] = hist_r
-        s_hist_ang[:] = hist_ang
-        s_tens[:] = tens_hist
-        ok = False
-        for cut in range(1, max_cuts + 1):
-            nsub = 2 ** cut
-            h = dt / nsub
-            counters[3] += 1
-            for l in range(3):
-                tau = -l / nsub
-                for a in range(nn):
-                    for i in range(3):
-                        hist_r[l, a, i] = _quad3(s_hist_r[0, a, i], s_hist_r[1, a, i], s_hist_r[2, a, i], tau)
-                for b in range(nb):
-                    for i in range(3):
-                        hist_ang[l, b, i] = _quad3(s_hist_ang[0, b, i], s_hist_ang[1, b, i], s_hist_ang[2, b, i], tau)
-            for s in range(ns):
-                tens_hist[0, s] = s_tens[0, s]
-                tens_hist[1, s] = s_tens[0, s]
-            good = True
-            for j in range(1, nsub + 1):
-                tau = j / nsub
-                for i in range(3):
-                    top_sub[i] = _quad_interp(top_path[k, i], s_hist_r[0, top_node, i], s_hist_r[1, top_node, i], tau)
-                st, it, el, md = houbolt_step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws)
-                counters[1] += it
-                if st != OK:
-                    good = False
-                    break
-            if good:
-                # restore the history spacing dt exactly: [r^{t+dt}, r^t, r^{t-dt}]
-                for a in range(nn):
-                    for i in range(3):
-                        hist_r[1, a, i] = s_hist_r[0, a, i]
-                        hist_r[2, a, i] = s_hist_r[1, a, i]
-                for b in range(nb):
-                    for i in range(3):
-                        hist_ang[1, b, i] = s_hist_ang[0, b, i]
-                        hist_ang[2, b, i] = s_hist_ang[1, b, i]
+        if st != OK:
+            s_hist_r[:] = hist_r
+            s_hist_ang[:] = hist_ang
+            s_tens[:] = tens_hist
+            s_cstate[:] = cstate
+            ok = False
+            for cut in range(1, max_cuts + 1):
+                nsub = 2 ** cut
+                h = dt / nsub
+                counters[3] += 1
+                for lv in range(3):
+                    tau = -lv / nsub
+                    for a in range(nn):
+                        for i in range(3):
+                            hist_r[lv, a, i] = _quad3(s_hist_r[0, a, i], s_hist_r[1, a, i], s_hist_r[2, a, i], tau)
+                    for b in range(nb):
+                        for i in range(3):
+                            hist_ang[lv, b, i] = _quad3(s_hist_ang[0, b, i], s_hist_ang[1, b, i], s_hist_ang[2, b, i], tau)
                 for s in range(ns):
+                    tens_hist[0, s] = s_tens[0, s]
                     tens_hist[1, s] = s_tens[0, s]
-                ok = True
-                break
-        if not ok:
-            hist_r[:] = s_hist_r
-            hist_ang[:] = s_hist_ang
-            tens_hist[:] = s_tens
-            return st, k, el, md
+                cstate[:] = s_cstate
+                good = True
+                for j in range(1, nsub + 1):
+                    tau = j / nsub
+                    for i in range(3):
+                        top_sub[i] = _quad_interp(top_path[k, i], s_hist_r[0, top_node, i], s_hist_r[1, top_node, i], tau)
+                    if wmode > 0:
+                        l0[wseg] = l_old + tau * dl
+                    st, it, el, md = houbolt_step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws,
+                                                  comp)
+                    counters[1] += it
+                    if st != OK:
+                        good = False
+                        break
+                if good:
+                    # restore the history spacing dt exactly: [r^{t+dt}, r^t, r^{t-dt}]
+                    for a in range(nn):
+                        for i in range(3):
+                            hist_r[1, a, i] = s_hist_r[0, a, i]
+                            hist_r[2, a, i] = s_hist_r[1, a, i]
+                    for b in range(nb):
+                        for i in range(3):
+                            hist_ang[1, b, i] = s_hist_ang[0, b, i]
+                            hist_ang[2, b, i] = s_hist_ang[1, b, i]
+                    for s in range(ns):
+                        tens_hist[1, s] = s_tens[0, s]
+                    ok = True
+                    break
+            if not ok:
+                hist_r[:] = s_hist_r
+                hist_ang[:] = s_hist_ang
+                tens_hist[:] = s_tens
+                cstate[:] = s_cstate
+                if wmode > 0:
+                    l0[wseg] = l_old
+                return st, k, el, md
+        if wmode > 0:
+            wstate[WS_V] = v_new
+            wstate[WS_LEN] += dl
+            wstate[WS_PAID] += dl
+            if l0[wseg] > 1.5 * winch[W_LNOM] or (l0[wseg] < 0.5 * winch[W_LNOM] and dl < 0.0):
+                return NEED_REMESH, k, wseg, 0.0
     return OK, -1, -1, 0.0
-

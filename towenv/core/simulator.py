@@ -31,12 +31,19 @@ def _get(obj, name, default=None):
 
 @dataclass
 class Snapshot:
-    """A copy of the full dynamic state. Restoring one is a few array copies (microseconds)."""
+    """A copy of the full dynamic state. Restoring one is a few array copies (microseconds); after a
+    winch node insertion/removal it also re-installs the discretisation of that time."""
     hist_r: np.ndarray
     hist_ang: np.ndarray
     tens_hist: np.ndarray
     top_react: np.ndarray
     step: int
+    cstate: np.ndarray
+    wstate: np.ndarray
+    comp: np.ndarray
+    winch: np.ndarray
+    system: object = None
+    l0: np.ndarray | None = None
 
 
 @dataclass
@@ -85,7 +92,12 @@ class Simulator:
         base = getattr(self.scene, "source_dir", None)
         data_dir = Path(__file__).resolve().parent.parent / "scenes" / "data"
         self.path = TowPointPath(_get(self.scene, "vessel"), Path(base) if base else None, data_dir)
+        self.comp = np.zeros(16)
+        self.winch = np.zeros(12)
+        self.wstate = np.zeros(4)
+        self.cstate = np.zeros(8)
         self._allocate()
+        self._setup_actuators()
         self._initial_state()
         self._initial = self.snapshot()
 
@@ -98,7 +110,7 @@ class Simulator:
         self.hist_ang = np.zeros((3, nb, 3))
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
-        self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react)
+        self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate)
         self._ws = (np.zeros((ns, 3)), np.zeros(ns), np.zeros((ns, 2, 3)), np.zeros((ns, 2, 3, 3)), np.zeros((ns, 3, 3)),
                     np.zeros((nn, 3, 3)), np.zeros((nn, 3, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)),
                     np.zeros((nn, mk, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)), np.zeros(ns), np.zeros((nn, mk, mk)),
@@ -108,9 +120,55 @@ class Simulator:
                     np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                     np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3), np.zeros((max(nb, 1), 9)),
                     np.zeros((max(nb, 1), 3, 3)), np.zeros((6, 3)))
-        self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)))
-        self.counters = np.zeros(4, np.int64)
+        self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)), np.zeros(8))
+        if not hasattr(self, "counters"):
+            self.counters = np.zeros(4, np.int64)
         self._args = (s.top_node, s.topo(), s.segp(), s.bodyp(), s.env())
+
+    _COMP_MODES = {"passive": K.COMP_PASSIVE, "locked": K.COMP_LOCKED, "position": K.COMP_POSITION,
+                   "force": K.COMP_FORCE}
+    _WINCH_MODES = {"speed": K.WINCH_SPEED, "constant_tension": K.WINCH_TENSION}
+
+    def _setup_actuators(self):
+        s = self.system
+        c = _get(self.scene, "compensator")
+        if c is not None:
+            p = self.comp
+            p[K.C_MODE] = self._COMP_MODES[c.mode]
+            p[K.C_K] = c.stiffness
+            p[K.C_B] = c.damping
+            p[K.C_MASS] = c.mass
+            p[K.C_SMIN] = -0.5 * c.stroke
+            p[K.C_SMAX] = 0.5 * c.stroke
+            p[K.C_KSTOP] = c.end_stop_stiffness
+            p[K.C_BSTOP] = c.end_stop_damping
+            p[K.C_TAU] = c.actuator_time_constant
+            p[K.C_RATE] = c.rate_limit
+            p[K.C_NODE] = s.comp_node
+            p[K.C_SHIP] = s.top_node
+            self._comp_bounds = (tuple(c.stiffness_bounds), tuple(c.damping_bounds))
+        w = _get(self.scene, "winch")
+        if w is not None:
+            roots = [ln.name for ln in self.scene.lines if ln.top_kind == "vessel"]
+            self.winch_line = w.line or roots[0]
+            lm = s.line(self.winch_line)
+            ln = self.scene.line(self.winch_line)
+            l_nom = w.nominal_segment_length or float(s.l0[lm.segments[0]])
+            junctions = self.scene.junctions(self.winch_line) if hasattr(self.scene, "junctions") else []
+            below = (ln.length - min(junctions)) if junctions else 0.0
+            p = self.winch
+            p[K.W_MODE] = self._WINCH_MODES[w.mode]
+            p[K.W_VCMD] = w.speed
+            p[K.W_VMAX] = w.max_speed
+            p[K.W_AMAX] = w.max_acceleration
+            p[K.W_LMIN] = w.min_length if w.min_length is not None else below + l_nom
+            p[K.W_LMAX] = w.max_length if w.max_length is not None else 10.0 * ln.length
+            p[K.W_TSET] = w.set_tension
+            p[K.W_GAIN] = w.gain
+            p[K.W_DEADBAND] = w.deadband
+            p[K.W_SEG] = lm.segments[0]
+            p[K.W_LNOM] = l_nom
+            self.wstate[K.WS_LEN] = float(s.l0[lm.segments].sum())
 
     def _initial_state(self):
         s = self.system
@@ -134,6 +192,9 @@ class Simulator:
             self.step_count = 0
         else:
             self._static_reaction(U)
+        if self.comp[K.C_MODE] > 0:
+            # preload: the compensator carries the static cable force at mid-stroke
+            self.comp[K.C_PRELOAD] = -self.top_react[2]
         self.counters[:] = 0
 
     def _static_reaction(self, U):
@@ -147,8 +208,8 @@ class Simulator:
                         s.cur_z, s.cur_v, tang, stretched, drag, bmat, madd)
         K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g, drag, bmat,
                         madd, s.pb_mass, s.pb_vol, s.pb_cda, s.pb_ca, s.cur_z, s.cur_v, mnode, bnode, fnode)
-        K.node_reaction(s.top_node, r, r, r, r, self.settings.dt, s.node_nseg, s.node_segs, s.node_sgn, tang,
-                        self.tens_hist[0], mnode, fnode, self.top_react)
+        K.node_reaction(s.cable_top_node, r, r, r, r, self.settings.dt, s.node_nseg, s.node_segs, s.node_sgn,
+                        tang, self.tens_hist[0], mnode, fnode, self.top_react)
 
     # ------------------------------------------------------------------------------------------
     @property
@@ -160,14 +221,25 @@ class Simulator:
         return self.step_count * self.settings.dt
 
     def snapshot(self) -> Snapshot:
+        winch = self.winch[K.W_MODE] > 0
         return Snapshot(self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy(), self.top_react.copy(),
-                        self.step_count)
+                        self.step_count, self.cstate.copy(), self.wstate.copy(), self.comp.copy(), self.winch.copy(),
+                        self.system if winch else None, self.system.l0.copy() if winch else None)
 
     def restore(self, snap: Snapshot) -> None:
+        if snap.system is not None and snap.system is not self.system:
+            self.system = snap.system
+            self._allocate()
+        if snap.l0 is not None:
+            self.system.l0[...] = snap.l0
         self.hist_r[...] = snap.hist_r
         self.hist_ang[...] = snap.hist_ang
         self.tens_hist[...] = snap.tens_hist
         self.top_react[...] = snap.top_react
+        self.cstate[...] = snap.cstate
+        self.wstate[...] = snap.wstate
+        self.comp[...] = snap.comp
+        self.winch[...] = snap.winch
         self.step_count = snap.step
 
     def reset(self) -> None:
@@ -176,12 +248,122 @@ class Simulator:
         self.counters[:] = 0
 
     def _run(self, tops, dt, t_start):
-        st, k, el, md = K.advance(len(tops), dt, tops, *self._args[:1], *self._args[1:], self.settings.array(),
-                                  self._state, self._ws, self._saved, self.counters)
-        if st != K.OK:
-            t_fail = t_start + (k + 1) * dt
+        done = 0
+        settings = self.settings.array()
+        while done < len(tops):
+            st, k, el, md = K.advance(len(tops) - done, dt, tops[done:], *self._args, settings, self._state,
+                                      self._ws, self._saved, self.counters, self.comp, self.winch, self.wstate)
+            if st == K.OK:
+                return
+            if st == K.NEED_REMESH:
+                done += k + 1
+                self._remesh()
+                continue
+            t_fail = t_start + (done + k + 1) * dt
             raise SimulationDivergence(t_fail, self._element_name(st, el), _CAUSES.get(st, f"status {st}"),
                                        int(self.settings.max_iterations), float(md))
+
+    def _remesh(self):
+        """Insert a node near the top of the winch line (payout) or remove one (haul-in), model.md 2.8."""
+        from .system import remesh_top
+        s = self.system
+        seg = int(self.winch[K.W_SEG])
+        l_nom = float(self.winch[K.W_LNOM])
+        insert = s.l0[seg] > 1.5 * l_nom
+        out = remesh_top(s, self.winch_line, insert, l_nom)
+        if out is None:          # nothing removable (junction or body right below): keep the short segment
+            self.winch[K.W_LNOM] = max(0.5 * float(s.l0[seg]), 1e-6) if not insert else l_nom
+            return
+        new, node_map, seg_map, info = out
+        old_r, old_ang, old_T = self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy()
+        old_react = self.top_react.copy()
+        self.system = new
+        self._allocate()
+        for i, o in enumerate(node_map):
+            if o >= 0:
+                self.hist_r[:, i] = old_r[:, o]
+        if insert:
+            f = info["fraction"]
+            lo, up = info["lower"], info["upper"]
+            self.hist_r[:, info["inserted"]] = old_r[:, lo] + f * (old_r[:, up] - old_r[:, lo])
+        for i, o in enumerate(seg_map):
+            if o >= 0:
+                self.tens_hist[:, i] = old_T[:, o]
+            else:
+                self.tens_hist[:, i] = old_T[:, info["split"][0]]
+        self.hist_ang[...] = old_ang
+        self.top_react[...] = old_react
+        self.winch[K.W_SEG] = new.line(self.winch_line).segments[0]
+        self.winch[K.W_LNOM] = l_nom
+        if self.comp[K.C_MODE] > 0:
+            self.comp[K.C_NODE] = new.comp_node
+            self.comp[K.C_SHIP] = new.top_node
+        self.remesh_count = getattr(self, "remesh_count", 0) + 1
+
+    # ------------------------------------------------------------------------------------------
+    def set_compensator(self, stiffness=None, damping=None, mode=None, command=None):
+        """Change the compensator at run time: stiffness/damping within the scene's bounds (semi-active),
+        the mode (passive, locked, position, force) and the active command (m or N)."""
+        if self.comp[K.C_MODE] == 0:
+            raise ValueError("set_compensator: the scene has no [compensator] section")
+        (klo, khi), (blo, bhi) = self._comp_bounds
+        if stiffness is not None:
+            if not (klo <= stiffness <= khi):
+                raise ValueError(f"compensator.stiffness: must be within [{klo:g}, {khi:g}] N/m (got {stiffness!r})")
+            self.comp[K.C_K] = stiffness
+        if damping is not None:
+            if not (blo <= damping <= bhi):
+                raise ValueError(f"compensator.damping: must be within [{blo:g}, {bhi:g}] N s/m (got {damping!r})")
+            self.comp[K.C_B] = damping
+        if mode is not None:
+            if mode not in self._COMP_MODES:
+                raise ValueError(f"compensator.mode: must be one of {sorted(self._COMP_MODES)} (got {mode!r})")
+            new = self._COMP_MODES[mode]
+            if new in (K.COMP_POSITION,) and self.comp[K.C_MODE] != new:
+                self.cstate[K.CS_ACT] = self.compensator_state()["stroke"]
+            self.comp[K.C_MODE] = new
+        if command is not None:
+            if not np.isfinite(command):
+                raise ValueError(f"compensator command: must be finite (got {command!r})")
+            self.comp[K.C_CMD] = command
+
+    def compensator_state(self):
+        """Stroke z (m, + up, 0 = mid-stroke), stroke velocity, end-stop hits, contact flag, deepest penetration."""
+        s = self.system
+        if s.comp_node < 0:
+            raise ValueError("compensator_state: the scene has no [compensator] section")
+        z = self.hist_r[:, s.comp_node, 2] - self.hist_r[:, s.top_node, 2]
+        return {"stroke": float(z[0]), "stroke_velocity": float((3 * z[0] - 4 * z[1] + z[2]) / (2 * self.dt)),
+                "hits": int(self.cstate[K.CS_HITS]), "in_contact": bool(self.cstate[K.CS_CONTACT]),
+                "max_penetration": float(self.cstate[K.CS_PEN]), "stiffness": float(self.comp[K.C_K]),
+                "damping": float(self.comp[K.C_B])}
+
+    def set_winch(self, speed=None, mode=None, set_tension=None):
+        """Winch payout speed command (m/s, payout > 0), mode (speed / constant_tension) or set tension."""
+        if self.winch[K.W_MODE] == 0:
+            raise ValueError("set_winch: the scene has no [winch] section")
+        if speed is not None:
+            vmax = self.winch[K.W_VMAX]
+            if not (np.isfinite(speed) and abs(speed) <= vmax):
+                raise ValueError(f"winch.speed: must be within ±{vmax:g} m/s (got {speed!r})")
+            self.winch[K.W_VCMD] = speed
+        if mode is not None:
+            if mode not in self._WINCH_MODES:
+                raise ValueError(f"winch.mode: must be one of {sorted(self._WINCH_MODES)} (got {mode!r})")
+            self.winch[K.W_MODE] = self._WINCH_MODES[mode]
+        if set_tension is not None:
+            if not (np.isfinite(set_tension) and set_tension >= 0):
+                raise ValueError(f"winch.set_tension: must be >= 0 N (got {set_tension!r})")
+            self.winch[K.W_TSET] = set_tension
+
+    def winch_state(self):
+        """Payout speed (m/s), deployed length of the winch line (m), total paid out (m), segments."""
+        if self.winch[K.W_MODE] == 0:
+            raise ValueError("winch_state: the scene has no [winch] section")
+        lm = self.system.line(self.winch_line)
+        return {"speed": float(self.wstate[K.WS_V]), "length": float(self.system.l0[lm.segments].sum()),
+                "paid_out": float(self.wstate[K.WS_PAID]), "segments": int(len(lm.segments)),
+                "top_segment_length": float(self.system.l0[lm.segments[0]])}
 
     def advance(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole steps of ``dt``)."""

@@ -95,6 +95,8 @@ def quasi_static(sys: System, top_position, U, n_passes=None):
         s = sys.node_up_seg[a]
         if s >= 0:
             r[a] = r[sys.seg_up[s]] + sys.l0[s] * np.array([-0.7071, 0.0, -0.7071])
+        elif sys.node_parent[a] >= 0:
+            r[a] = r[sys.node_parent[a]]
     g = sys.g
     reaction = {}
     for _ in range(passes):
@@ -155,6 +157,9 @@ def quasi_static(sys: System, top_position, U, n_passes=None):
         for a in sys.post_order[::-1]:
             a = int(a)
             if a == sys.top_node:
+                continue
+            if a == sys.comp_node:
+                r[a] = r[sys.top_node]
                 continue
             if sys.node_kind[a] == PRESCRIBED_AFT:
                 ib = aft_of_node[a]

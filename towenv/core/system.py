@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kernels import FREE, PRESCRIBED_AFT, PRESCRIBED_FIXED, PRESCRIBED_TOP
+from .kernels import COMPENSATOR, FREE, PRESCRIBED_AFT, PRESCRIBED_FIXED, PRESCRIBED_TOP
 
 MAX_SEGS_PER_NODE = 8
 BODY_PARAM = 30          # see the layout in _rigid_body_params
@@ -79,6 +79,12 @@ class System:
     lines: list[LineMap] = field(default_factory=list)
     bodies: list[BodyMap] = field(default_factory=list)
     anchors: dict = field(default_factory=dict)          # node -> fixed position
+    comp_node: int = -1                                   # heave-compensator sheave node, -1 if none
+
+    @property
+    def cable_top_node(self) -> int:
+        """The node where the cable meets the vessel: the compensator sheave, or the tow point."""
+        return self.comp_node if self.comp_node >= 0 else self.top_node
 
     @property
     def n_nodes(self) -> int:
@@ -208,6 +214,12 @@ def build_system(scene) -> System:
         return len(node_kind) - 1
 
     top_node = new_node(PRESCRIBED_TOP)
+    comp_node = -1
+    vessel_node = top_node
+    if _get(scene, "compensator") is not None:
+        # the cable's top rides on the compensator sheave; the ship tow point is a separate node
+        comp_node = new_node(COMPENSATOR)
+        vessel_node = comp_node
     seg_lo: list[int] = []
     seg_up: list[int] = []
     seg_prop: list[tuple] = []
@@ -235,7 +247,7 @@ def build_system(scene) -> System:
             pending.append(ln)
             continue
         if kind == "vessel":
-            top = top_node
+            top = vessel_node
         elif kind == "line":
             top = junction_node[(ref, dist)]
         elif kind == "body":
@@ -281,49 +293,11 @@ def build_system(scene) -> System:
     ns = len(seg_lo)
     seg_lo_a = np.array(seg_lo, np.int64)
     seg_up_a = np.array(seg_up, np.int64)
-    node_nseg = np.zeros(nn, np.int64)
-    node_segs = -np.ones((nn, MAX_SEGS_PER_NODE), np.int64)
-    node_sgn = np.zeros((nn, MAX_SEGS_PER_NODE), np.float64)
-    seg_uplocal = np.zeros(ns, np.int64)
-    for s in range(ns):
-        for a, sg in ((seg_lo[s], 1.0), (seg_up[s], -1.0)):
-            k = node_nseg[a]
-            if k >= MAX_SEGS_PER_NODE:
-                raise ValueError(f"more than {MAX_SEGS_PER_NODE} segments meet at one node")
-            node_segs[a, k] = s
-            node_sgn[a, k] = sg
-            if sg < 0:
-                seg_uplocal[s] = k
-            node_nseg[a] += 1
-    node_up_seg = -np.ones(nn, np.int64)
-    for s in range(ns):
-        node_up_seg[seg_lo[s]] = s
-    node_parent = -np.ones(nn, np.int64)
-    for a in range(nn):
-        if node_up_seg[a] >= 0:
-            node_parent[a] = seg_up[node_up_seg[a]]
-    for bname, c in aft_node_of.items():
-        node_parent[c] = body_node_of[bname]
-    # post-order (children first) from the top node
-    children: list[list[int]] = [[] for _ in range(nn)]
-    for a in range(nn):
-        if node_parent[a] >= 0:
-            children[node_parent[a]].append(a)
-    post: list[int] = []
-    stack = [(top_node, 0)]
-    while stack:
-        a, state = stack.pop()
-        if state == 0:
-            stack.append((a, 1))
-            for c in children[a]:
-                stack.append((c, 0))
-        else:
-            post.append(a)
-    if len(post) != nn:
-        raise ValueError("line topology is not connected to the vessel")
-    order = np.array([node_up_seg[a] for a in post if node_up_seg[a] >= 0], np.int64)
-    pos = np.empty(ns, np.int64)
-    pos[order] = np.arange(ns)
+    extra_parent = {c: body_node_of[b] for b, c in aft_node_of.items()}
+    if comp_node >= 0:
+        extra_parent[comp_node] = top_node
+    (node_nseg, node_segs, node_sgn, seg_uplocal, node_up_seg, node_parent, post, order,
+     pos) = topology_arrays(nn, seg_lo_a, seg_up_a, extra_parent, top_node)
 
     sp = np.array(seg_prop, float).reshape(ns, 8)
     l0, diam, mu, cn, ct, can, cat, ea = (sp[:, i].copy() for i in range(8))
@@ -373,12 +347,13 @@ def build_system(scene) -> System:
     return System(seg_lo=seg_lo_a, seg_up=seg_up_a, seg_uplocal=seg_uplocal,
                   node_kind=np.array(node_kind, np.int64), node_nseg=node_nseg, node_segs=node_segs,
                   node_sgn=node_sgn, order=order, pos=pos, node_parent=node_parent, node_up_seg=node_up_seg,
-                  post_order=np.array(post, np.int64), top_node=top_node,
+                  post_order=post, top_node=top_node,
                   l0=l0, diam=diam, mu=mu, cn=cn, ct=ct, can=can, cat=cat, ea=ea,
                   body_node=body_node, body_aft_node=body_aft, bp=bp, btab_n=btab_n, btab=btab,
                   pb_mass=pb_mass, pb_vol=pb_vol, pb_cda=pb_cda, pb_ca=pb_ca,
                   rho=rho, g=g, cur_z=cur_z, cur_v=cur_v,
-                  lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps, anchors=anchors)
+                  lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps, anchors=anchors,
+                  comp_node=comp_node)
 
 
 def current_table(cur):
@@ -443,3 +418,163 @@ def _tables(b):
             out[4 * j + k, :m] = tab[k]
         n[j] = m
     return out, n
+
+
+def topology_arrays(nn, seg_lo, seg_up, extra_parent, top_node):
+    """Adjacency, elimination order and static-march order of a tree of ``nn`` nodes.
+
+    ``extra_parent`` links nodes that hang from another node without a segment (aft tow points from
+    their body, the compensator sheave from the ship tow point)."""
+    ns = len(seg_lo)
+    node_nseg = np.zeros(nn, np.int64)
+    node_segs = -np.ones((nn, MAX_SEGS_PER_NODE), np.int64)
+    node_sgn = np.zeros((nn, MAX_SEGS_PER_NODE), np.float64)
+    seg_uplocal = np.zeros(ns, np.int64)
+    for s in range(ns):
+        for a, sg in ((seg_lo[s], 1.0), (seg_up[s], -1.0)):
+            k = node_nseg[a]
+            if k >= MAX_SEGS_PER_NODE:
+                raise ValueError(f"more than {MAX_SEGS_PER_NODE} segments meet at one node")
+            node_segs[a, k] = s
+            node_sgn[a, k] = sg
+            if sg < 0:
+                seg_uplocal[s] = k
+            node_nseg[a] += 1
+    node_up_seg = -np.ones(nn, np.int64)
+    for s in range(ns):
+        node_up_seg[seg_lo[s]] = s
+    node_parent = -np.ones(nn, np.int64)
+    for a in range(nn):
+        if node_up_seg[a] >= 0:
+            node_parent[a] = seg_up[node_up_seg[a]]
+    for c, p in extra_parent.items():
+        node_parent[c] = p
+    # post-order (children first) from the top node
+    children: list[list[int]] = [[] for _ in range(nn)]
+    for a in range(nn):
+        if node_parent[a] >= 0:
+            children[node_parent[a]].append(a)
+    post: list[int] = []
+    stack = [(top_node, 0)]
+    while stack:
+        a, state = stack.pop()
+        if state == 0:
+            stack.append((a, 1))
+            for c in children[a]:
+                stack.append((c, 0))
+        else:
+            post.append(a)
+    if len(post) != nn:
+        raise ValueError("line topology is not connected to the vessel")
+    order = np.array([node_up_seg[a] for a in post if node_up_seg[a] >= 0], np.int64)
+    pos = np.empty(ns, np.int64)
+    pos[order] = np.arange(ns)
+    return (node_nseg, node_segs, node_sgn, seg_uplocal, node_up_seg, node_parent, np.array(post, np.int64),
+            order, pos)
+
+
+def remesh_top(sysm: "System", line: str, insert: bool, l_nom: float):
+    """Insert a node ``l_nom`` above the node below the top segment of ``line`` (insert=True), or remove
+    the node below the top segment, merging the two top segments (insert=False).
+
+    Returns (new System, node map, segment map, info): ``node map[i]`` is the old index of new node i
+    (−1 for the inserted node), likewise for segments; ``info`` gives the inserted/removed node's
+    neighbours and the split fraction, for moving the dynamic state across. Total unstretched length,
+    hence cable mass, is conserved exactly."""
+    lm = sysm.line(line)
+    s_top = int(lm.segments[0])
+    c0 = int(lm.nodes[0])
+    c1 = int(lm.nodes[1])
+    nn, ns = sysm.n_nodes, sysm.n_segments
+    seg_lo = sysm.seg_lo.tolist()
+    seg_up = sysm.seg_up.tolist()
+    props = np.stack([sysm.l0, sysm.diam, sysm.mu, sysm.cn, sysm.ct, sysm.can, sysm.cat, sysm.ea], axis=1)
+    node_kind = sysm.node_kind.tolist()
+    if insert:
+        l_top = props[s_top, 0]
+        new = nn
+        node_kind.append(FREE)
+        seg_up[s_top] = new                       # lower part: c1 -> new, length l_nom
+        seg_lo.append(new)                        # upper part: new -> c0
+        seg_up.append(c0)
+        props = np.vstack([props, props[s_top]])
+        props[s_top, 0] = l_nom
+        props[ns, 0] = l_top - l_nom
+        node_map = np.concatenate([np.arange(nn), [-1]])
+        seg_map = np.concatenate([np.arange(ns), [-1]])
+        info = {"inserted": new, "lower": c1, "upper": c0, "fraction": l_nom / l_top, "split": (s_top, ns)}
+        new_lines = {}
+        for m in sysm.lines:
+            if m.name == line:
+                new_lines[m.name] = (np.concatenate([[c0, new], m.nodes[1:]]), np.concatenate([[ns], m.segments]))
+            else:
+                new_lines[m.name] = (m.nodes.copy(), m.segments.copy())
+    else:
+        if sysm.node_nseg[c1] != 2 or sysm.node_kind[c1] != FREE or sysm.pb_mass[c1] > 0 \
+                or c1 in sysm.body_node.tolist() or len(lm.segments) < 2:
+            return None
+        s_below = int(lm.segments[1])
+        seg_up[s_below] = c0
+        props[s_below, 0] += props[s_top, 0]
+        keep_n = np.array([i for i in range(nn) if i != c1])
+        keep_s = np.array([i for i in range(ns) if i != s_top])
+        nmap_old_to_new = -np.ones(nn, np.int64)
+        nmap_old_to_new[keep_n] = np.arange(len(keep_n))
+        smap_old_to_new = -np.ones(ns, np.int64)
+        smap_old_to_new[keep_s] = np.arange(len(keep_s))
+        seg_lo = [int(nmap_old_to_new[seg_lo[i]]) for i in keep_s]
+        seg_up = [int(nmap_old_to_new[seg_up[i]]) for i in keep_s]
+        props = props[keep_s]
+        node_kind = [node_kind[i] for i in keep_n]
+        node_map, seg_map = keep_n, keep_s
+        info = {"removed": c1, "merged": (s_top, s_below)}
+        new_lines = {}
+        for m in sysm.lines:
+            nodes = [int(nmap_old_to_new[x]) for x in m.nodes if x != c1]
+            segs = [int(smap_old_to_new[x]) for x in m.segments if x != s_top]
+            new_lines[m.name] = (np.array(nodes), np.array(segs))
+    # remap node-indexed data
+    old_to_new = -np.ones(nn, np.int64)
+    for i, o in enumerate(node_map):
+        if o >= 0:
+            old_to_new[o] = i
+
+    def nn_(x):
+        return int(old_to_new[x]) if x >= 0 else -1
+
+    n_new = len(node_kind)
+    top_node = nn_(sysm.top_node)
+    comp_node = nn_(sysm.comp_node)
+    body_node = np.array([nn_(x) for x in sysm.body_node], np.int64)
+    body_aft = np.array([nn_(x) for x in sysm.body_aft_node], np.int64)
+    extra_parent = {int(body_aft[i]): int(body_node[i]) for i in range(len(body_node)) if body_aft[i] >= 0}
+    if comp_node >= 0:
+        extra_parent[comp_node] = top_node
+    seg_lo_a = np.array(seg_lo, np.int64)
+    seg_up_a = np.array(seg_up, np.int64)
+    (node_nseg, node_segs, node_sgn, seg_uplocal, node_up_seg, node_parent, post, order,
+     pos) = topology_arrays(n_new, seg_lo_a, seg_up_a, extra_parent, top_node)
+
+    def per_node(arr):
+        out = np.zeros(n_new)
+        for i, o in enumerate(node_map):
+            if o >= 0:
+                out[i] = arr[o]
+        return out
+
+    lines = [LineMap(m.name, new_lines[m.name][0].astype(np.int64), new_lines[m.name][1].astype(np.int64), m.length)
+             for m in sysm.lines]
+    lines = [LineMap(m.name, m.nodes, m.segments, float(props[m.segments, 0].sum())) for m in lines]
+    bodies = [BodyMap(b.name, b.kind, nn_(b.node), b.rigid_index, nn_(b.aft_node)) for b in sysm.bodies]
+    new = System(seg_lo=seg_lo_a, seg_up=seg_up_a, seg_uplocal=seg_uplocal,
+                 node_kind=np.array(node_kind, np.int64), node_nseg=node_nseg, node_segs=node_segs,
+                 node_sgn=node_sgn, order=order, pos=pos, node_parent=node_parent, node_up_seg=node_up_seg,
+                 post_order=post, top_node=top_node,
+                 l0=props[:, 0].copy(), diam=props[:, 1].copy(), mu=props[:, 2].copy(), cn=props[:, 3].copy(),
+                 ct=props[:, 4].copy(), can=props[:, 5].copy(), cat=props[:, 6].copy(), ea=props[:, 7].copy(),
+                 body_node=body_node, body_aft_node=body_aft, bp=sysm.bp, btab_n=sysm.btab_n, btab=sysm.btab,
+                 pb_mass=per_node(sysm.pb_mass), pb_vol=per_node(sysm.pb_vol), pb_cda=per_node(sysm.pb_cda),
+                 pb_ca=per_node(sysm.pb_ca), rho=sysm.rho, g=sysm.g, cur_z=sysm.cur_z, cur_v=sysm.cur_v,
+                 lines=lines, bodies=bodies, anchors={nn_(k): v for k, v in sysm.anchors.items()},
+                 comp_node=comp_node)
+    return new, np.asarray(node_map), np.asarray(seg_map), info
