@@ -964,7 +964,8 @@ class Solver(_Model):
 # =====================================================================================================
 class Compensator(_Model):
     """Heave compensator between the vessel sheave and the cable top (Hover et al. §IV-A): spring k,
-    damper b, apparent mass m moving with the top node, stroke limits with stiff end stops. ``mode``:
+    damper b, apparent mass m moving with the top node, stroke ±stroke/2 about mid-stroke with rigid end
+    stops (exact contact: the sheave is held at a stop while the stop pushes; hits are counted). ``mode``:
     ``passive`` (k, b changeable at run time within the bounds: semi-active), ``locked``, ``position``
     (commanded sheave position, first-order lag + rate limit) or ``force`` (commanded force, same)."""
     mode: _choice("passive", "locked", "position", "force") = "passive"
@@ -972,8 +973,6 @@ class Compensator(_Model):
     damping: Num(ge=0, unit="N s/m") = 0.0
     mass: Num(ge=0, unit="kg") = 0.0
     stroke: Num(gt=0, unit="m") = 2.0
-    end_stop_stiffness: Num(gt=0, unit="N/m") = 1.0e7
-    end_stop_damping: Num(ge=0, unit="N s/m") = 1.0e5
     stiffness_bounds: tuple[Num(ge=0, unit="N/m"), Num(ge=0, unit="N/m")] = (0.0, 1.0e6)
     damping_bounds: tuple[Num(ge=0, unit="N s/m"), Num(ge=0, unit="N s/m")] = (0.0, 1.0e6)
     actuator_time_constant: Num(gt=0, unit="s") = 0.2

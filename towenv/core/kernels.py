@@ -46,9 +46,10 @@ PRESCRIBED_AFT = 2
 PRESCRIBED_FIXED = 3   # anchor: fixed in space
 COMPENSATOR = 4        # cable top node on a heave-compensator sheave: moves with the ship except along z
 NEED_REMESH = 10       # advance(): not a failure — the winch line needs a node inserted/removed
+RETRY_CONTACT = 11     # houbolt_step(): the sheave's end-stop contact state changed; redo the step
 
 # heave compensator parameter layout (float64[16])
-C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_KSTOP, C_BSTOP, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
+C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_TRIAL, C_UNUSED, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
 # compensator state layout (float64[8]): hits, in-contact flag, max penetration, actuator state
 CS_HITS, CS_CONTACT, CS_PEN, CS_ACT = range(4)
 COMP_PASSIVE, COMP_LOCKED, COMP_POSITION, COMP_FORCE = 1, 2, 3, 4
@@ -608,8 +609,14 @@ def _compensator_node(a, ship, comp, cmode, act, dt, rs, r_t, r_tm1, r_tm2, node
     z_tm1 = r_tm1[a, 2] - r_tm1[ship, 2]
     z_tm2 = r_tm2[a, 2] - r_tm2[ship, 2]
     ns = node_nseg[a]
-    if cmode == COMP_LOCKED or cmode == COMP_POSITION:
-        znew = z_t if cmode == COMP_LOCKED else act
+    contact = comp[C_TRIAL]
+    if cmode == COMP_LOCKED or cmode == COMP_POSITION or contact != 0.0:
+        if contact > 0.0:
+            znew = comp[C_SMAX]
+        elif contact < 0.0:
+            znew = comp[C_SMIN]
+        else:
+            znew = z_t if cmode == COMP_LOCKED else act
         for i in range(3):
             acon[a, i] = rs[ship, i]
         acon[a, 2] += znew
@@ -630,15 +637,6 @@ def _compensator_node(a, ship, comp, cmode, act, dt, rs, r_t, r_tm1, r_tm2, node
     rhs = 2.0 * m_eff * h_z * idt2 - bb * zd_hist + comp[C_PRELOAD]
     if cmode == COMP_FORCE:
         rhs += act
-    # end stops (stiff spring-dampers), active at the current iterate
-    if z_star > comp[C_SMAX]:
-        kk += comp[C_KSTOP]
-        bb += comp[C_BSTOP]
-        rhs += comp[C_KSTOP] * comp[C_SMAX] - comp[C_BSTOP] * zd_hist
-    elif z_star < comp[C_SMIN]:
-        kk += comp[C_KSTOP]
-        bb += comp[C_BSTOP]
-        rhs += comp[C_KSTOP] * comp[C_SMIN] - comp[C_BSTOP] * zd_hist
     # loads on the node along e, the ship-acceleration (transport) terms, implicit drag and string stiffness
     beb = bnode[a, 2, 2]
     kg = 0.0
@@ -657,6 +655,29 @@ def _compensator_node(a, ship, comp, cmode, act, dt, rs, r_t, r_tm1, r_tm2, node
         qvec[a, k, 0] = 0.0
         qvec[a, k, 1] = 0.0
         qvec[a, k, 2] = tang[s, 2] / d
+
+
+@njit(cache=True)
+def _end_stop_force(a, ship, comp, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, node_sgn, tang, tens,
+                    mnode, fnode):
+    """Force the end stop must exert on the sheave (+ up) to hold it where it is: the residual of the
+    sheave equation at the converged step (used to release a contact that would have to pull)."""
+    idt2 = 1.0 / (dt * dt)
+    z = rs[a, 2] - rs[ship, 2]
+    z_t = r_t[a, 2] - r_t[ship, 2]
+    z_tm1 = r_tm1[a, 2] - r_tm1[ship, 2]
+    z_tm2 = r_tm2[a, 2] - r_tm2[ship, 2]
+    zdd = (2.0 * z - 5.0 * z_t + 4.0 * z_tm1 - z_tm2) * idt2
+    zd = (11.0 * z - 18.0 * z_t + 9.0 * z_tm1 - 2.0 * z_tm2) / (6.0 * dt)
+    a0 = (2.0 * rs[ship, 0] - 5.0 * r_t[ship, 0] + 4.0 * r_tm1[ship, 0] - r_tm2[ship, 0]) * idt2
+    a1 = (2.0 * rs[ship, 1] - 5.0 * r_t[ship, 1] + 4.0 * r_tm1[ship, 1] - r_tm2[ship, 1]) * idt2
+    a2 = (2.0 * rs[ship, 2] - 5.0 * r_t[ship, 2] + 4.0 * r_tm1[ship, 2] - r_tm2[ship, 2]) * idt2
+    f = fnode[a, 2] - comp[C_K] * z - comp[C_B] * zd + comp[C_PRELOAD] \
+        - (mnode[a, 2, 0] * a0 + mnode[a, 2, 1] * a1 + mnode[a, 2, 2] * a2) - comp[C_MASS] * a2
+    for k in range(node_nseg[a]):
+        s = node_segs[a, k]
+        f += node_sgn[a, k] * tens[s] * tang[s, 2]
+    return (comp[C_MASS] + mnode[a, 2, 2]) * zdd - f
 
 
 @njit(cache=True)
@@ -967,6 +988,23 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             break
     if status != OK:
         return status, it, elem, maxd
+    # --- end-stop contact: exact (the sheave is held at the stop while the stop pushes) --------------
+    if cmode == COMP_PASSIVE or cmode == COMP_FORCE:
+        z_new = rs[cnode, 2] - rs[top_node, 2]
+        trial = comp[C_TRIAL]
+        if trial == 0.0:
+            if z_new > comp[C_SMAX]:
+                comp[C_TRIAL] = 1.0
+                return RETRY_CONTACT, it, cnode, maxd
+            if z_new < comp[C_SMIN]:
+                comp[C_TRIAL] = -1.0
+                return RETRY_CONTACT, it, cnode, maxd
+        else:
+            fs = _end_stop_force(cnode, top_node, comp, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, node_sgn,
+                                 tang, tens, mnode, fnode)
+            if trial * fs > 0.0:       # the stop would have to pull: release
+                comp[C_TRIAL] = 0.0
+                return RETRY_CONTACT, it, cnode, maxd
     # --- checks and commit ------------------------------------------------------------------------
     for s in range(ns):
         if not math.isinf(ea[s]) and tens[s] / ea[s] > max_strain:
@@ -985,14 +1023,11 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         pen = z - comp[C_SMAX]
         if comp[C_SMIN] - z > pen:
             pen = comp[C_SMIN] - z
-        if pen > 0.0:
-            if cstate[CS_CONTACT] == 0.0:
-                cstate[CS_HITS] += 1.0
-            cstate[CS_CONTACT] = 1.0
-            if pen > cstate[CS_PEN]:
-                cstate[CS_PEN] = pen
-        else:
-            cstate[CS_CONTACT] = 0.0
+        if pen > cstate[CS_PEN]:
+            cstate[CS_PEN] = pen
+        if comp[C_TRIAL] != 0.0 and cstate[CS_CONTACT] == 0.0:
+            cstate[CS_HITS] += 1.0
+        cstate[CS_CONTACT] = comp[C_TRIAL]
         cstate[CS_ACT] = act_new
     for i in range(3):
         top_react[i] = react[i]
@@ -1022,6 +1057,21 @@ def _quad_interp(y1, y0, ym1, tau):
 def _quad3(y0, ym1, ym2, tau):
     """Quadratic through (0, y0), (−1, ym1), (−2, ym2) evaluated at τ ≤ 0 (in units of the old step)."""
     return y0 * (tau + 1.0) * (tau + 2.0) * 0.5 - ym1 * tau * (tau + 2.0) + ym2 * tau * (tau + 1.0) * 0.5
+
+
+@njit(cache=True)
+def _step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
+    """houbolt_step with the end-stop active set: start from the contact state of the last step and redo
+    the step (at most twice) when the converged solution contradicts it."""
+    cstate = state[4]
+    comp[C_TRIAL] = cstate[CS_CONTACT]
+    its = 0
+    for attempt in range(3):
+        st, it, el, md = houbolt_step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
+        its += it
+        if st != RETRY_CONTACT:
+            return st, its, el, md
+    return FAIL_NEWTON, its, el, md
 
 
 @njit(cache=True)
@@ -1088,7 +1138,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             dl = v_new * dt
             l_old = l0[wseg]
             l0[wseg] = l_old + dl
-        st, it, el, md = houbolt_step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
+        st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
         counters[0] += 1
         counters[1] += it
         if it > counters[2]:
@@ -1122,8 +1172,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                         top_sub[i] = _quad_interp(top_path[k, i], s_hist_r[0, top_node, i], s_hist_r[1, top_node, i], tau)
                     if wmode > 0:
                         l0[wseg] = l_old + tau * dl
-                    st, it, el, md = houbolt_step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws,
-                                                  comp)
+                    st, it, el, md = _step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
                     counters[1] += it
                     if st != OK:
                         good = False

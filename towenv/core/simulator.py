@@ -140,8 +140,6 @@ class Simulator:
             p[K.C_MASS] = c.mass
             p[K.C_SMIN] = -0.5 * c.stroke
             p[K.C_SMAX] = 0.5 * c.stroke
-            p[K.C_KSTOP] = c.end_stop_stiffness
-            p[K.C_BSTOP] = c.end_stop_damping
             p[K.C_TAU] = c.actuator_time_constant
             p[K.C_RATE] = c.rate_limit
             p[K.C_NODE] = s.comp_node
