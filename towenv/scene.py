@@ -609,13 +609,28 @@ class ManoeuvreWindow(NamedTuple):
 
 
 class Vessel(_Model):
-    """Tow-point motion: steady tow, manoeuvres (in the order given) and oscillatory excitation."""
+    """Tow-point motion: steady tow, manoeuvres (in the order given), oscillatory excitation and the
+    wave-induced motion of the vessel (``model`` preset or ``rao_file`` with a ``[sea]``, or a measured
+    ``motion_file``), transferred to the tow point through ``lever_arm`` (tow point relative to the
+    vessel's centre of gravity, ship axes x forward, y port, z up; default: the preset's tow point)."""
     tow_point: Vec3(unit="m") = (0.0, 0.0, 0.0)
     speed: Speed = 0.0
     heading_deg: Num(unit="deg") = 0.0
     manoeuvres: tuple[Manoeuvre, ...] = ()
     excitation: tuple[Excitation, ...] = ()
     ramp: Ramp = Ramp()
+    model: _choice("coastal_survey", "research_vessel") | None = None
+    rao_file: Text | None = None
+    motion_file: Text | None = None
+    lever_arm: Vec3(unit="m") | None = None
+
+    @model_validator(mode="after")
+    def _check_motion_source(self):
+        given = [n for n in ("model", "rao_file", "motion_file") if getattr(self, n) is not None]
+        if "rao_file" in given and "motion_file" in given:
+            _problems(("motion_file", "give either rao_file (with [sea]) or motion_file (a measured record), "
+                                      "not both"))
+        return self
 
     def schedule(self) -> list[ManoeuvreWindow]:
         """Start/end times and speeds of the manoeuvres (a turn at zero speed never ends: ``inf``)."""
@@ -960,6 +975,42 @@ class Solver(_Model):
 
 
 # =====================================================================================================
+# Sea state
+# =====================================================================================================
+class Sea(_Model):
+    """Irregular sea driving the vessel motion: ``hs``/``tp`` or a WMO sea-state ``code`` (0–9) with the
+    ``open_ocean`` or ``coastal`` (fetch-limited) period convention; JONSWAP/Bretschneider/PM spectrum;
+    ``heading_deg`` is the direction the waves travel relative to the ship's initial heading (180 = head
+    seas); ``spreading_s`` makes the sea short-crested (cos-2s); the record is seeded."""
+    hs: Num(ge=0, le=30, unit="m") | None = None
+    tp: Num(gt=0, le=40, unit="s") | None = None
+    code: Int(ge=0, le=9) | None = None
+    convention: _choice("open_ocean", "coastal") = "open_ocean"
+    spectrum: _choice("jonswap", "bretschneider", "pm") = "jonswap"
+    gamma: Num(ge=1, le=10) | None = None
+    heading_deg: Num(ge=-360, le=360, unit="deg") = 180.0
+    spreading_s: Num(gt=0, le=100) | None = None
+    seed: Int(ge=0) = 0
+    n_components: Int(ge=10, le=5000) = 200
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.code is None and (self.hs is None or self.tp is None):
+            _problems(("hs", "give hs and tp (m, s), or a sea-state code (0-9)"))
+        if self.code is not None and (self.hs is not None or self.tp is not None):
+            _problems(("code", "give either a sea-state code or hs/tp, not both"))
+        return self
+
+    def sea_state(self):
+        from .sea import SeaState
+        kw = dict(spectrum=self.spectrum, gamma=self.gamma, heading_deg=self.heading_deg,
+                  spreading_s=self.spreading_s)
+        if self.code is not None:
+            return SeaState.from_code(self.code, convention=self.convention, **kw)
+        return SeaState(self.hs, self.tp, **kw)
+
+
+# =====================================================================================================
 # Heave compensator and winch
 # =====================================================================================================
 class Compensator(_Model):
@@ -1029,6 +1080,7 @@ class Scene(_Model):
     vessel: Vessel = Vessel()
     lines: tuple[Line, ...] = Field(min_length=1)
     bodies: tuple[Body, ...] = ()
+    sea: Sea | None = None
     compensator: Compensator | None = None
     winch: Winch | None = None
     solver: Solver = Solver()
@@ -1045,6 +1097,18 @@ class Scene(_Model):
         return hash((self.name, len(self.lines), len(self.bodies)))
 
     # ---------------------------------------------------------------- cross-field / topology checks
+    @model_validator(mode="after")
+    def _check_vessel_files(self, info):
+        base = (info.context or {}).get("base_dir") if info is not None else None
+        probs = []
+        for fld in ("rao_file", "motion_file"):
+            f = getattr(self.vessel, fld)
+            if f is not None and not _resolve(f, base).exists():
+                probs.append((f"vessel.{fld}", f"file not found: {f!r}"))
+        if probs:
+            _problems(*probs)
+        return self
+
     @model_validator(mode="after")
     def _check_topology(self):
         probs: list[tuple[str, str]] = []
@@ -1163,6 +1227,12 @@ class Scene(_Model):
                         probs.append((f"lines[{i}].segments",
                                       f"must list one count per span: line {ln.name!r} has {n} span"
                                       f"{'s' if n != 1 else ''}{where} (got {len(ln.segments)} entries)"))
+        if self.sea is not None and self.vessel.model is None and self.vessel.rao_file is None:
+            probs.append(("sea", "a sea moves the tow point through the vessel: set vessel.model (a preset: "
+                                 "'coastal_survey', 'research_vessel') or vessel.rao_file"))
+        if (self.vessel.rao_file is not None or self.vessel.model is not None) and self.sea is None \
+                and self.vessel.motion_file is None:
+            probs.append(("vessel.model", "a vessel RAO model needs a [sea] section"))
         if not probs and self.winch is not None:
             roots_names = [ln.name for ln in lines if ln.top_kind == "vessel"]
             wl = self.winch.line or (roots_names[0] if roots_names else None)

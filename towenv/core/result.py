@@ -19,6 +19,9 @@ class Result:
     * ``lines[name]``: ``positions`` (n, nodes, 3) top node first, ``tensions`` (n, segments) N, top first
     * ``top_force`` (n,3): force of the cable on the vessel at the tow point; ``top_tension`` (n,) its norm
     * ``tow_point`` (n,3): prescribed tow-point position
+    * ``actuators``: compensator ``stroke``/``stroke_velocity``/``stiffness``/``damping`` and winch
+      ``payout_speed``/``deployed_length`` (n,), when the scene has them (a winch line's node arrays are
+      NaN-padded to a fixed capacity)
     * ``meta``: scene name, time step, solver statistics, wall time
     """
     t: np.ndarray
@@ -28,6 +31,7 @@ class Result:
     top_tension: np.ndarray | None = None
     tow_point: np.ndarray | None = None
     meta: dict = field(default_factory=dict)
+    actuators: dict = field(default_factory=dict)
 
     def save(self, path) -> Path:
         """Write one ``.npz`` file (arrays) with the metadata embedded as JSON."""
@@ -43,6 +47,8 @@ class Result:
         for ln, d in self.lines.items():
             for k, v in d.items():
                 arrays[f"line::{ln}::{k}"] = v
+        for k, v in self.actuators.items():
+            arrays[f"actuator::{k}"] = v
         arrays["__meta__"] = np.array(json.dumps(self.meta, default=float))
         np.savez_compressed(path, **{k: v for k, v in arrays.items() if v is not None})
         return path
@@ -60,6 +66,8 @@ class Result:
                 elif key.startswith("line::"):
                     _, ln, k = key.split("::")
                     lines.setdefault(ln, {})[k] = z[key]
+                elif key.startswith("actuator::"):
+                    kw.setdefault("actuators", {})[key.split("::")[1]] = z[key]
                 elif key == "__meta__":
                     kw["meta"] = json.loads(str(z[key]))
                 else:
@@ -77,4 +85,5 @@ class Result:
                       {ln: cut(d) for ln, d in self.lines.items()},
                       None if self.top_force is None else self.top_force[m],
                       None if self.top_tension is None else self.top_tension[m],
-                      None if self.tow_point is None else self.tow_point[m], dict(self.meta))
+                      None if self.tow_point is None else self.tow_point[m], dict(self.meta),
+                      {k: v[m] for k, v in self.actuators.items()})

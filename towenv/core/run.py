@@ -67,12 +67,48 @@ class Recorder:
         self.tow_point = np.zeros((n, 3))
         self.bodies = {b.name: {k: np.zeros((n, 3)) for k in ("position", "euler", "velocity", "omega")}
                        for b in s.bodies}
-        self.lines = {lm.name: {"positions": np.zeros((n, len(lm.nodes), 3)),
-                                "tensions": np.zeros((n, len(lm.segments)))} for lm in s.lines}
+        # with a winch the number of nodes of its line changes: pad with NaN up to the capacity
+        cap = {lm.name: len(lm.nodes) for lm in s.lines}
+        self.has_winch = sim.winch[0] > 0
+        self.has_comp = sim.comp[0] > 0
+        if self.has_winch:
+            import towenv.core.kernels as K
+            lm = s.line(sim.winch_line)
+            extra = (sim.winch[K.W_LMAX] - float(s.l0[lm.segments].sum())) / (0.5 * sim.winch[K.W_LNOM])
+            cap[lm.name] += int(np.ceil(max(extra, 0.0))) + 2
+        self.lines = {lm.name: {"positions": np.full((n, cap[lm.name], 3), np.nan),
+                                "tensions": np.full((n, cap[lm.name] - 1), np.nan)} for lm in s.lines}
+        self.actuators = {}
+        if self.has_comp:
+            self.actuators.update({k: np.zeros(n) for k in ("stroke", "stroke_velocity", "stiffness", "damping")})
+        if self.has_winch:
+            self.actuators.update({k: np.zeros(n) for k in ("payout_speed", "deployed_length")})
+        self._fast_init(n)
+
+    def _fast_init(self, n):
+        s = self.sim.system
+        self.fast = not self.has_winch
+        if self.fast:
+            self.R = np.zeros((n, s.n_nodes, 3))
+            self.bnodes = np.array([b.node for b in s.bodies], int)
+            self.RB = np.zeros((n, 3, len(self.bnodes), 3))
+            self.A = np.zeros((n, 3, s.n_rigid, 3))
+            self.T = np.zeros((n, s.n_segments))
 
     def record(self):
         i = self.n
         sim = self.sim
+        if self.fast:
+            self.t[i] = sim.t
+            self.R[i] = sim.hist_r[0]
+            self.RB[i] = sim.hist_r[:, self.bnodes]
+            self.A[i] = sim.hist_ang
+            self.T[i] = sim.tens_hist[0]
+            self.top_force[i] = sim.top_react
+            if self.actuators:
+                self._record_actuators(i)
+            self.n += 1
+            return
         self.t[i] = sim.t
         self.top_force[i] = sim.top_force
         self.tow_point[i] = sim.positions[sim.system.top_node]
@@ -82,13 +118,53 @@ class Recorder:
                 d[k][i] = st[k]
         for name, d in self.lines.items():
             st = sim.line_state(name)
-            d["positions"][i] = st["positions"]
-            d["tensions"][i] = st["tensions"]
+            k = min(len(st["positions"]), d["positions"].shape[1])
+            d["positions"][i, :k] = st["positions"][:k]
+            d["tensions"][i, :k - 1] = st["tensions"][:k - 1]
+        self._record_actuators(i)
         self.n += 1
+
+    def _record_actuators(self, i):
+        sim = self.sim
+        if self.has_comp:
+            c = sim.compensator_state()
+            for key in ("stroke", "stroke_velocity", "stiffness", "damping"):
+                self.actuators[key][i] = c[key]
+        if self.has_winch:
+            w = sim.winch_state()
+            self.actuators["payout_speed"][i] = w["speed"]
+            self.actuators["deployed_length"][i] = w["length"]
+
+    def _fast_finish(self):
+        """Turn the raw state records into body and line time series (vectorised)."""
+        from .kernels import euler_rates_to_omega
+        n = self.n
+        s = self.sim.system
+        dt = self.sim.dt
+        for k, bm in enumerate(s.bodies):
+            d = self.bodies[bm.name]
+            rb = self.RB[:n, :, k]
+            d["position"][:n] = rb[:, 0]
+            d["velocity"][:n] = (3 * rb[:, 0] - 4 * rb[:, 1] + rb[:, 2]) / (2 * dt)
+            if bm.rigid_index >= 0:
+                a = self.A[:n, :, bm.rigid_index]
+                d["euler"][:n] = a[:, 0]
+                dang = (3 * a[:, 0] - 4 * a[:, 1] + a[:, 2]) / (2 * dt)
+                w = np.empty(3)
+                for i in range(n):
+                    euler_rates_to_omega(a[i, 0], dang[i], w)
+                    d["omega"][i] = w
+        for lm in s.lines:
+            d = self.lines[lm.name]
+            d["positions"][:n] = self.R[:n][:, lm.nodes]
+            d["tensions"][:n] = self.T[:n][:, lm.segments]
+        self.tow_point[:n] = self.R[:n, s.top_node]
 
     def result(self) -> Result:
         n = self.n
         sim = self.sim
+        if self.fast:
+            self._fast_finish()
         t = self.t[:n]
         mean, heading, _ = sim.path.mean_path(t)
         e_along = np.stack([np.cos(heading), np.sin(heading), np.zeros_like(heading)], axis=1)
@@ -103,5 +179,11 @@ class Recorder:
             bodies[name] = dd
         lines = {name: {k: v[:n] for k, v in d.items()} for name, d in self.lines.items()}
         tf = self.top_force[:n]
-        return Result(t=t, bodies=bodies, lines=lines, top_force=tf, top_tension=np.linalg.norm(tf, axis=1),
-                      tow_point=self.tow_point[:n], meta={})
+        meta = {}
+        if self.has_comp:
+            c = sim.compensator_state()
+            meta.update(end_stop_hits=c["hits"], max_end_stop_penetration=c["max_penetration"])
+        res = Result(t=t, bodies=bodies, lines=lines, top_force=tf, top_tension=np.linalg.norm(tf, axis=1),
+                     tow_point=self.tow_point[:n], meta=meta)
+        res.actuators = {k: v[:n] for k, v in self.actuators.items()}
+        return res

@@ -92,6 +92,10 @@ class Simulator:
         base = getattr(self.scene, "source_dir", None)
         data_dir = Path(__file__).resolve().parent.parent / "scenes" / "data"
         self.path = TowPointPath(_get(self.scene, "vessel"), Path(base) if base else None, data_dir)
+        self.wave = None
+        self.vessel_motion = self._vessel_motion(Path(base) if base else None, data_dir)
+        if self.vessel_motion is not None:
+            self.path.oscillations.append(self.vessel_motion)
         self.comp = np.zeros(16)
         self.winch = np.zeros(12)
         self.wstate = np.zeros(4)
@@ -100,6 +104,38 @@ class Simulator:
         self._setup_actuators()
         self._initial_state()
         self._initial = self.snapshot()
+
+    def _vessel_motion(self, base, data_dir):
+        """Wave-induced tow-point motion from the [sea] and the vessel model / RAO table / record."""
+        vessel = _get(self.scene, "vessel")
+        if vessel is None or isinstance(vessel, dict):
+            return None
+        src = None
+
+        def resolve(f):
+            p = Path(f)
+            if p.is_absolute():
+                return p
+            for d in (base, data_dir, Path.cwd()):
+                if d is not None and (d / p).exists():
+                    return d / p
+            return p
+
+        from .. import vessel as V
+        if vessel.motion_file is not None:
+            src = V.MotionRecord.from_csv(resolve(vessel.motion_file))
+        elif vessel.rao_file is not None:
+            src = V.RAOTable.from_csv(resolve(vessel.rao_file))
+        elif vessel.model is not None:
+            src = vessel.model
+        if src is None:
+            return None
+        sea = _get(self.scene, "sea")
+        if sea is not None and not isinstance(src, V.MotionRecord):
+            from ..sea import synthesize
+            self.wave = synthesize(sea.sea_state(), duration=3600.0, seed=sea.seed, n_components=sea.n_components)
+        lever = None if vessel.lever_arm is None else np.asarray(vessel.lever_arm, float)
+        return V.TowPointMotion.from_path(self.path, src, self.wave, lever)
 
     # ------------------------------------------------------------------------------------------
     def _allocate(self):
@@ -372,8 +408,7 @@ class Simulator:
         if n <= 0:
             return
         dt = self.settings.dt
-        times = (self.step_count + np.arange(1, n + 1)) * dt
-        tops = self.path.position(times)
+        tops = self._tow_points(self.step_count + 1, n)
         t0 = self.t
         try:
             self._run(tops, dt, t0)
@@ -382,6 +417,29 @@ class Simulator:
             self.step_count += int(round((exc.time - t0) / dt)) - 1
             raise
         self.step_count += n
+
+    _BLOCK = 2048
+
+    def _tow_points(self, first, n):
+        """Tow-point positions at steps first … first+n−1, evaluated in fixed, aligned blocks of steps (the
+        path is analytic; fixed blocks keep every time evaluated in the same vectorised call whatever the
+        caller's chunking, so runs stay bit-for-bit reproducible, and amortise vessel-motion evaluation)."""
+        B = self._BLOCK
+        cache = self.__dict__.setdefault("_top_blocks", {})
+        out = np.empty((n, 3))
+        i = 0
+        while i < n:
+            step = first + i
+            b = step // B
+            if b not in cache:
+                if len(cache) > 4:
+                    cache.clear()
+                cache[b] = self.path.position((b * B + np.arange(B)) * self.settings.dt)
+            j = step - b * B
+            m = min(B - j, n - i)
+            out[i:i + m] = cache[b][j:j + m]
+            i += m
+        return out
 
     # ------------------------------------------------------------------------------------------
     def _element_name(self, status, el):
