@@ -98,6 +98,33 @@ def bench(scene, duration, dts, repeats):
     return rows, manoeuvre, dt_ref
 
 
+def actuator_overhead(repeats, duration=300.0, dt=0.05):
+    repeats = max(repeats, 5)
+    """Real-time factor of the two-part tow in a coastal sea state 4 (small craft, head seas): bare
+    (tow point on the ship), with the passive compensator active, and with the winch paying out."""
+    base = towenv.load_scene("two_part_coastal_ss4")
+    cases = {
+        "bare core (sea, no compensator)": base.with_overrides(compensator=None),
+        "compensator active": base,
+        "winch paying out 0.1 m/s (85 → 115 m)": base.with_overrides(compensator=None,
+                                                                    winch={"speed": 0.1, "max_length": 400.0}),
+    }
+    print("\n| two_part_coastal_ss4, dt = %.2f s | real-time factor | overhead vs bare | nodes at end |" % dt)
+    print("|---|---|---|---|")
+    ref = None
+    for label, sc in cases.items():
+        sim = towenv.Simulator(sc, dt=dt)
+        walls = []
+        for _ in range(repeats):
+            sim.reset()
+            t0 = time.perf_counter()
+            sim.advance(duration)
+            walls.append(time.perf_counter() - t0)
+        rtf = duration / statistics.median(walls)
+        ref = ref or rtf
+        print(f"| {label} | {rtf:.0f}× | {100 * (ref / rtf - 1):+.1f} % | {sim.system.n_nodes} |", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*")
@@ -126,6 +153,8 @@ def main(argv=None):
                 e = ", ".join(f"{b}: heave {100 * v[0]:.2f} %, pitch {100 * v[1]:.2f} %" for b, v in r["err"].items())
             print(f"| {scene} | {r['nodes']} | {r['dt']} | {r['rtf']:.0f}× | {r['iters']:.2f} | {r['cuts']} | {e} |",
                   flush=True)
+    if not args.scenes:
+        actuator_overhead(args.repeats)
     for scene in ("two_part_tow_1", "ablow_turn_1km"):
         sim = towenv.Simulator(scene)
         snap = sim.snapshot()

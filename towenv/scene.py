@@ -981,7 +981,9 @@ class Sea(_Model):
     """Irregular sea driving the vessel motion: ``hs``/``tp`` or a WMO sea-state ``code`` (0–9) with the
     ``open_ocean`` or ``coastal`` (fetch-limited) period convention; JONSWAP/Bretschneider/PM spectrum;
     ``heading_deg`` is the direction the waves travel relative to the ship's initial heading (180 = head
-    seas); ``spreading_s`` makes the sea short-crested (cos-2s); the record is seeded."""
+    seas); ``spreading_s`` makes the sea short-crested (cos-2s); the record is seeded.
+    ``orbital_velocities`` lets the waves' (deep-water, exp(kz)-decaying) orbital velocities act on the
+    cables' and bodies' drag (their inertia/Froude–Krylov loads are not modelled)."""
     hs: Num(ge=0, le=30, unit="m") | None = None
     tp: Num(gt=0, le=40, unit="s") | None = None
     code: Int(ge=0, le=9) | None = None
@@ -992,6 +994,7 @@ class Sea(_Model):
     spreading_s: Num(gt=0, le=100) | None = None
     seed: Int(ge=0) = 0
     n_components: Int(ge=10, le=5000) = 200
+    orbital_velocities: bool = False
 
     @model_validator(mode="after")
     def _check(self):

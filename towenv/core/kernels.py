@@ -719,7 +719,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     hist_r, hist_ang, tens_hist, top_react, cstate = state
     (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
      gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
-     fb, mb, bdiag, react, bkc, bdmat, scr) = ws
+     fb, mb, bdiag, react, bkc, bdmat, scr, flow) = ws
 
     nn = node_kind.shape[0]
     ns = l0.shape[0]
@@ -766,7 +766,10 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         # --- coefficients at the current iterate -------------------------------------------------
         for a in range(nn):
             for i in range(3):
-                vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt
+                # velocity relative to the wave orbital flow (zero unless [sea] orbital_velocities is on);
+                # the current is subtracted where each load is evaluated
+                vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt \
+                    - flow[a, i]
         segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
                       tang, stretched, drag, bmat, madd)
         node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
@@ -1060,6 +1063,54 @@ def _quad3(y0, ym1, ym2, tau):
 
 
 @njit(cache=True)
+def wave_orbital_velocity(x, y, z, t, amp, omega, kx, ky, k, phase, out):
+    """Deep-water linear (Airy) orbital velocity at (x, y, z) and time t, global axes (towenv.sea's
+    convention): P = ω t − kx x − ky y + φ, u = Σ a ω e^{kz} cos P (kx, ky)/k, w = −Σ a ω e^{kz} sin P.
+    Points above the mean surface get the surface value (no stretching)."""
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    zz = z if z < 0.0 else 0.0
+    for j in range(amp.shape[0]):
+        f = amp[j] * omega[j] * math.exp(k[j] * zz)
+        if f < 1e-12:
+            continue
+        p = omega[j] * t - kx[j] * x - ky[j] * y + phase[j]
+        c = math.cos(p)
+        fc = f * c / k[j]
+        out[0] += fc * kx[j]
+        out[1] += fc * ky[j]
+        out[2] -= f * math.sin(p)
+
+
+@njit(cache=True)
+def _wave_flow(t, r_t, r_tm1, r_tm2, wave, flow):
+    """Orbital velocity at every node's predicted position for the step ending at t (frozen during the
+    step's Newton iteration). ``wave = (amp, omega, kx, ky, k, phase, opts)`` with
+    ``opts = [enabled, z_cut]``: nodes below ``z_cut`` (where every component has decayed below
+    1e-6 m/s) are skipped."""
+    amp, omega, kx, ky, k, phase, opts = wave
+    nn = flow.shape[0]
+    v = np.empty(3)
+    for a in range(nn):
+        flow[a, 0] = 0.0
+        flow[a, 1] = 0.0
+        flow[a, 2] = 0.0
+    if opts[0] == 0.0:
+        return
+    for a in range(nn):
+        z = 3.0 * r_t[a, 2] - 3.0 * r_tm1[a, 2] + r_tm2[a, 2]
+        if z < opts[1]:
+            continue
+        x = 3.0 * r_t[a, 0] - 3.0 * r_tm1[a, 0] + r_tm2[a, 0]
+        y = 3.0 * r_t[a, 1] - 3.0 * r_tm1[a, 1] + r_tm2[a, 1]
+        wave_orbital_velocity(x, y, z, t, amp, omega, kx, ky, k, phase, v)
+        flow[a, 0] = v[0]
+        flow[a, 1] = v[1]
+        flow[a, 2] = v[2]
+
+
+@njit(cache=True)
 def _step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """houbolt_step with the end-stop active set: start from the contact state of the last step and redo
     the step (at most twice) when the converged solution contradicts it."""
@@ -1109,7 +1160,7 @@ def _winch_speed(winch, wstate, tens_hist, dt):
 
 @njit(cache=True)
 def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, state, ws, saved, counters,
-            comp, winch, wstate):
+            comp, winch, wstate, t0, wave):
     """Advance ``n_steps`` steps of size ``dt``; ``top_path[k]`` is the vessel tow point at the end of step k.
 
     A step whose Newton iteration fails is retried as 2, 4, … 2^max_cuts sub-steps with the Houbolt
@@ -1129,7 +1180,9 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     top_sub = np.empty(3)
     wmode = int(winch[W_MODE])
     wseg = int(winch[W_SEG])
+    flow = ws[40]
     for k in range(n_steps):
+        _wave_flow(t0 + (k + 1) * dt, hist_r[0], hist_r[1], hist_r[2], wave, flow)
         dl = 0.0
         l_old = 0.0
         v_new = 0.0

@@ -105,6 +105,55 @@ class Simulator:
         self._initial_state()
         self._initial = self.snapshot()
 
+    _NO_WAVE = (np.zeros(1), np.ones(1), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1), np.zeros(2))
+
+    def _wave_arrays(self):
+        """Wave components for the orbital-velocity option ([sea] orbital_velocities = true)."""
+        sea = _get(self.scene, "sea")
+        if self.wave is None or sea is None or not getattr(sea, "orbital_velocities", False):
+            return self._NO_WAVE
+        w = self.wave
+        if getattr(self, "_wave_cache", (None,))[0] is not w:
+            off = self.path.initial_heading
+            kx = w.k * np.cos(w.direction + off)
+            ky = w.k * np.sin(w.direction + off)
+            vmax = float(np.sum(w.amplitude * w.omega))
+            z_cut = np.log(1e-6 / vmax) / float(np.min(w.k)) if vmax > 1e-6 else 0.0
+            self._wave_cache = (w, (w.amplitude.copy(), w.omega.copy(), kx, ky, w.k.copy(), w.phase.copy(),
+                                    np.array([1.0, z_cut])))
+        return self._wave_cache[1]
+
+    def set_sea(self, sea=None, seed: int = 0, n_components: int | None = None):
+        """Replace the sea (a ``towenv.sea.SeaState``, a scene ``[sea]`` table/dict, or None for calm) and
+        its random seed, keeping the vessel model. The initial state is unchanged (it is the steady tow),
+        so ``reset()`` after ``set_sea`` starts a new episode in the new sea in microseconds."""
+        from .. import vessel as V
+        from ..sea import SeaState, synthesize
+        if self.vessel_motion is not None and self.vessel_motion in self.path.oscillations:
+            self.path.oscillations.remove(self.vessel_motion)
+        self.__dict__.pop("_top_blocks", None)
+        vessel = _get(self.scene, "vessel")
+        src = None
+        if vessel is not None and not isinstance(vessel, dict):
+            src = vessel.model
+            if vessel.rao_file is not None and self.vessel_motion is not None:
+                src = self.vessel_motion.source
+        if sea is None:
+            self.wave, self.vessel_motion = None, None
+            return
+        if src is None:
+            raise ValueError("set_sea: the scene has no vessel model (vessel.model or vessel.rao_file)")
+        if isinstance(sea, dict):
+            from ..scene import Sea
+            sea = Sea(**sea).sea_state()
+        elif not isinstance(sea, SeaState):
+            sea = sea.sea_state()
+        ncomp = n_components or getattr(_get(self.scene, "sea"), "n_components", 200) or 200
+        self.wave = synthesize(sea, duration=3600.0, seed=seed, n_components=ncomp)
+        lever = None if vessel.lever_arm is None else np.asarray(vessel.lever_arm, float)
+        self.vessel_motion = V.TowPointMotion.from_path(self.path, src, self.wave, lever)
+        self.path.oscillations.append(self.vessel_motion)
+
     def _vessel_motion(self, base, data_dir):
         """Wave-induced tow-point motion from the [sea] and the vessel model / RAO table / record."""
         vessel = _get(self.scene, "vessel")
@@ -155,7 +204,7 @@ class Simulator:
                     np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros(3), np.zeros(3), np.zeros((3, 3)),
                     np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
                     np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3), np.zeros((max(nb, 1), 9)),
-                    np.zeros((max(nb, 1), 3, 3)), np.zeros((6, 3)))
+                    np.zeros((max(nb, 1), 3, 3)), np.zeros((6, 3)), np.zeros((nn, 3)))
         self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)), np.zeros(8))
         if not hasattr(self, "counters"):
             self.counters = np.zeros(4, np.int64)
@@ -286,7 +335,8 @@ class Simulator:
         settings = self.settings.array()
         while done < len(tops):
             st, k, el, md = K.advance(len(tops) - done, dt, tops[done:], *self._args, settings, self._state,
-                                      self._ws, self._saved, self.counters, self.comp, self.winch, self.wstate)
+                                      self._ws, self._saved, self.counters, self.comp, self.winch, self.wstate,
+                                      t_start + done * dt, self._wave_arrays())
             if st == K.OK:
                 return
             if st == K.NEED_REMESH:
