@@ -290,9 +290,29 @@ def psd(result, path, discard: float = 0.0, title: str | None = None):
     return _save(fig, path)
 
 
+def actuators(result, path, discard: float = 0.0, title: str | None = None):
+    """Compensator stroke and stroke velocity, and/or winch payout speed and deployed length."""
+    acts = getattr(result, "actuators", {}) or {}
+    panels = [k for k in ("stroke", "stroke_velocity", "payout_speed", "deployed_length") if k in acts]
+    if not panels:
+        return None
+    plt = _plt()
+    labels = {"stroke": "compensator stroke (m)", "stroke_velocity": "stroke velocity (m/s)",
+              "payout_speed": "winch payout speed (m/s)", "deployed_length": "deployed length (m)"}
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels)), sharex=True, squeeze=False)
+    for ax, k in zip(axes[:, 0], panels):
+        ax.plot(result.t, acts[k], lw=0.9)
+        ax.set_ylabel(labels[k])
+        ax.grid(alpha=0.3)
+        _shade(ax, result, discard)
+    axes[-1, 0].set_xlabel("t (s)")
+    fig.suptitle(title or "Actuators")
+    return _save(fig, path)
+
+
 #: file name -> plotting function, as written by :func:`save_all`
 PLOTS = {"side_view.png": side_view, "plan_view.png": plan_view, "body_motion.png": body_motion,
-         "tensions.png": tensions, "psd.png": psd}
+         "tensions.png": tensions, "psd.png": psd, "actuators.png": actuators}
 
 
 def save_all(result, folder, discard: float = 0.0, track=None) -> list[Path]:
@@ -302,5 +322,7 @@ def save_all(result, folder, discard: float = 0.0, track=None) -> list[Path]:
     out = []
     for fname, fn in PLOTS.items():
         kw = {"track": track} if fn in (side_view, plan_view) else {}
-        out.append(fn(result, folder / fname, discard=discard, **kw))
+        p = fn(result, folder / fname, discard=discard, **kw)
+        if p is not None:
+            out.append(p)
     return out

@@ -127,18 +127,36 @@ def summarize(result, discard: float = 0.0) -> dict:
         out["top_tension"] = {"min": _f(tt.min()), "mean": _f(tt.mean()), "max": _f(tt.max())}
 
     for name, d in w.lines.items():
-        T = np.asarray(d["tensions"], float)                    # (n, segments), top first
-        slack = T <= SLACK_TENSION
+        T = np.asarray(d["tensions"], float)                    # (n, segments), top first (NaN-padded
+        valid = np.isfinite(T)                                  # for a winch line whose node count changes)
+        slack = valid & (T <= SLACK_TENSION)
+        last = np.array([row[np.isfinite(row)][-1] if np.isfinite(row).any() else np.nan for row in T])
         out["lines"][name] = {
-            "segments": int(T.shape[1]),
-            "top_segment": {"min": _f(T[:, 0].min()), "mean": _f(T[:, 0].mean()), "max": _f(T[:, 0].max())},
-            "bottom_segment_max": _f(T[:, -1].max()),
-            "max_segment_tension": _f(T.max()),
-            "min_segment_tension": _f(T.min()),
+            "segments": int(np.max(valid.sum(axis=1))) if valid.size else 0,
+            "top_segment": {"min": _f(np.nanmin(T[:, 0])), "mean": _f(np.nanmean(T[:, 0])),
+                            "max": _f(np.nanmax(T[:, 0]))},
+            "bottom_segment_max": _f(np.nanmax(last)),
+            "max_segment_tension": _f(np.nanmax(T)),
+            "min_segment_tension": _f(np.nanmin(T)),
             "slack_segments": int(np.count_nonzero(slack.any(axis=0))),
             "slack_samples": int(np.count_nonzero(slack)),
-            "slack_fraction": _f(np.mean(slack)),
+            "slack_fraction": _f(np.count_nonzero(slack) / max(np.count_nonzero(valid), 1)),
         }
+    acts = getattr(w, "actuators", {}) or {}
+    if acts:
+        out["actuators"] = {}
+        if "stroke" in acts:
+            z = np.asarray(acts["stroke"], float)
+            out["actuators"]["compensator"] = {
+                "stroke_significant_amplitude": _f(2 * np.std(z)), "stroke_min": _f(z.min()),
+                "stroke_max": _f(z.max()), "stroke_velocity_rms": _f(np.sqrt(np.mean(np.square(acts["stroke_velocity"])))),
+                "end_stop_hits": result.meta.get("end_stop_hits"),
+            }
+        if "payout_speed" in acts:
+            out["actuators"]["winch"] = {
+                "length_start": _f(acts["deployed_length"][0]), "length_end": _f(acts["deployed_length"][-1]),
+                "payout_speed_rms": _f(np.sqrt(np.mean(np.square(acts["payout_speed"])))),
+            }
 
     m = result.meta
     out["solver"] = {k: (_f(m[k]) if isinstance(m.get(k), float) else m.get(k))
@@ -231,6 +249,21 @@ def summary_markdown(summary: dict, title: str | None = None) -> str:
         out += _table(["", "min", "mean", "max", "max any segment", "slack segments (% samples)"], rows)
         out += ["", "Slack: segments at zero tension at least once / all segments, and the share of "
                     "segment-samples at zero tension.", ""]
+
+    acts = s.get("actuators", {})
+    if acts:
+        rows = []
+        c = acts.get("compensator")
+        if c:
+            rows += [["compensator stroke, significant amplitude (m)", _fmt(c["stroke_significant_amplitude"])],
+                     ["compensator stroke min / max (m)", f"{_fmt(c['stroke_min'])} / {_fmt(c['stroke_max'])}"],
+                     ["stroke velocity RMS (m/s)", _fmt(c["stroke_velocity_rms"])],
+                     ["end-stop hits (whole run)", _fmt(c["end_stop_hits"])]]
+        wn = acts.get("winch")
+        if wn:
+            rows += [["winch: deployed length start / end (m)", f"{_fmt(wn['length_start'])} / {_fmt(wn['length_end'])}"],
+                     ["winch payout speed RMS (m/s)", _fmt(wn["payout_speed_rms"])]]
+        out += ["## Actuators", ""] + _table(["", "value"], rows) + [""]
 
     sv = s.get("solver", {})
     if sv:

@@ -1,0 +1,346 @@
+"""Swappable pieces of the towenv environments (Jumanji-style strategy objects).
+
+A :class:`~towenv.envs.base.TowEnv` is assembled from three small, picklable objects, each replaceable
+through a constructor keyword:
+
+* ``sea_generator`` — a :class:`SeaGenerator`: ``gen(rng) -> (SeaState, wave_seed)``, the initial-state
+  distribution of an episode (the sea state and the random seed of its wave realisation);
+* ``reward_fn`` — a :class:`RewardFn`: ``fn(m, action, prev_action) -> (reward, components)``;
+* ``observation_fn`` — an :class:`Observer`: named sensor channels with noise and delay.
+
+None of these imports gymnasium; they only see plain floats and numpy arrays.
+
+``m`` is the *measurement* dict the environment builds once per control step (all SI units, see
+:data:`MEASUREMENTS`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..sea import SeaState
+from ..stats import RATE_LIMITS
+
+__all__ = [
+    "MEASUREMENTS", "Channel", "CHANNELS", "Observer",
+    "SeaGenerator", "RandomCodeSeas", "FixedSeas", "default_eval_sea_states",
+    "RewardFn", "HeavePitchReward", "HeaveOnlyReward",
+    "HEAVE_RATE_LIMIT", "PITCH_RATE_LIMIT",
+]
+
+#: Table 6.1 (thesis) sonar motion-rate limits in SI units: heave 1 m/s, pitch 6.28 deg/s (in rad/s).
+HEAVE_RATE_LIMIT = float(RATE_LIMITS["heave"][0])
+PITCH_RATE_LIMIT = math.radians(float(RATE_LIMITS["pitch"][0]))
+
+#: Keys of the per-control-step measurement dict ``m`` (SI units; z up, pitch + nose down).
+MEASUREMENTS = {
+    "t": "simulated time (s)",
+    "tow_vel_z": "tow-point vertical velocity (m/s), from the prescribed tow-point history (IMU)",
+    "tow_acc_z": "tow-point vertical acceleration (m/s^2), backward second difference (IMU)",
+    "top_tension": "tow-point cable force magnitude (N)",
+    "top_tension_ratio": "top tension / its static (steady-tow) value",
+    "fish_heave": "towed-body z minus its steady-tow z (m, + up; depth deviation = -heave)",
+    "fish_depth": "towed-body depth below the mean free surface (m, + down)",
+    "fish_pitch": "towed-body pitch (rad, + nose down)",
+    "fish_heave_rate": "towed-body vertical velocity (m/s)",
+    "fish_pitch_rate": "towed-body pitch rate q (rad/s)",
+    "min_tension": "smallest segment tension of all lines (N)",
+    "tension_ratio": "largest (tension / breaking load) over all lines and the tow point",
+    "comp_stroke": "compensator stroke / half stroke (0 = mid-stroke, +-1 = end stops)  [compensator]",
+    "comp_stroke_vel": "compensator stroke velocity (m/s)  [compensator]",
+    "end_stop_hits": "compensator end-stop hits during this control step  [compensator]",
+    "winch_speed": "winch payout speed / max speed (payout > 0)  [winch]",
+    "winch_length_dev": "winch-line length minus its initial length (m)  [winch]",
+}
+
+
+# =====================================================================================================
+# Observations
+# =====================================================================================================
+@dataclass(frozen=True)
+class Channel:
+    """An observation channel: ``obs = clip(value / scale, low, high)``. ``source`` is the measurement
+    key (or a special source: ``last_action``, ``time_left``, ``wave_preview``)."""
+    name: str
+    source: str
+    unit: str
+    scale: float
+    low: float
+    high: float
+    doc: str = ""
+
+
+_D = math.radians
+CHANNELS: dict[str, Channel] = {c.name: c for c in [
+    Channel("tow_vel_z", "tow_vel_z", "m/s", 1.0, -10.0, 10.0, "tow-point vertical velocity (IMU)"),
+    Channel("tow_acc_z", "tow_acc_z", "m/s^2", 1.0, -30.0, 30.0, "tow-point vertical acceleration (IMU)"),
+    Channel("top_tension", "top_tension_ratio", "-", 1.0, 0.0, 20.0, "top tension / static top tension"),
+    Channel("comp_stroke", "comp_stroke", "-", 1.0, -1.5, 1.5, "compensator stroke / half stroke"),
+    Channel("comp_stroke_vel", "comp_stroke_vel", "m/s", 1.0, -10.0, 10.0, "compensator stroke velocity"),
+    Channel("winch_speed", "winch_speed", "-", 1.0, -1.5, 1.5, "winch payout speed / max speed"),
+    Channel("winch_length_dev", "winch_length_dev", "m", 10.0, -10.0, 10.0,
+            "winch-line length deviation from its initial length, in units of 10 m"),
+    Channel("fish_heave", "fish_heave", "m", 1.0, -20.0, 20.0, "fish heave (m, + up): depth deviation = -heave"),
+    Channel("fish_pitch", "fish_pitch", "rad", 0.1, -15.0, 15.0, "fish pitch in units of 0.1 rad (+ nose down)"),
+    Channel("fish_heave_rate", "fish_heave_rate", "m/s", HEAVE_RATE_LIMIT, -20.0, 20.0,
+            "fish heave rate / Table 6.1 limit (1 m/s)"),
+    Channel("fish_pitch_rate", "fish_pitch_rate", "rad/s", PITCH_RATE_LIMIT, -100.0, 100.0,
+            "fish pitch rate / Table 6.1 limit (6.28 deg/s)"),
+    Channel("last_action", "last_action", "-", 1.0, -1.0, 1.0, "the previous action (one entry per action dim)"),
+    Channel("time_left", "time_left", "-", 1.0, 0.0, 1.0, "fraction of the episode left"),
+    Channel("wave_preview", "wave_preview", "m", 1.0, -30.0, 30.0,
+            "wave elevation now at preview_distances ahead of the tow point (one entry per distance)"),
+]}
+
+
+class Observer:
+    """Named sensor channels -> a finite float32 vector, with per-channel Gaussian noise and a delay.
+
+    Parameters
+    ----------
+    names : sequence of channel names (keys of :data:`CHANNELS`).
+    noise : ``{name: std}`` in the channel's *physical* unit (m, m/s, rad, …; for ``top_tension`` a
+        fraction of the static tension). Drawn from the environment's ``np_random`` at measurement time.
+    delay : whole control steps between measurement and observation (ring buffer; at reset the buffer
+        is filled with the initial measurement).
+    action_dim, preview_distances : sizes of the vector channels ``last_action`` / ``wave_preview``.
+    """
+
+    def __init__(self, names: Sequence[str], noise: Mapping[str, float] | None = None, delay: int = 0,
+                 action_dim: int = 1, preview_distances: Sequence[float] = ()):
+        names = list(names)
+        unknown = [n for n in names if n not in CHANNELS]
+        if unknown:
+            raise ValueError(f"unknown observation channel(s) {unknown}; known: {sorted(CHANNELS)}")
+        if len(set(names)) != len(names):
+            raise ValueError(f"observation channels repeated: {names}")
+        noise = dict(noise or {})
+        bad = [n for n in noise if n not in names]
+        if bad:
+            raise ValueError(f"sensor noise given for channel(s) not observed: {bad}")
+        if any(not (math.isfinite(float(s)) and float(s) >= 0) for s in noise.values()):
+            raise ValueError(f"sensor noise std must be finite and >= 0 (got {noise})")
+        if int(delay) != delay or delay < 0:
+            raise ValueError(f"observation delay must be a whole number of control steps >= 0 (got {delay!r})")
+        if "wave_preview" in names and len(preview_distances) == 0:
+            raise ValueError("the wave_preview channel needs preview_distances (m ahead of the tow point)")
+        self.names = names
+        self.noise = noise
+        self.delay = int(delay)
+        self.action_dim = int(action_dim)
+        self.preview_distances = tuple(float(d) for d in preview_distances)
+        lows, highs, scales, stds, self.layout = [], [], [], [], []
+        for n in names:
+            c = CHANNELS[n]
+            width = {"last_action": self.action_dim, "wave_preview": len(self.preview_distances)}.get(n, 1)
+            self.layout.append((c.source, len(lows), width))
+            lows += [c.low] * width
+            highs += [c.high] * width
+            scales += [c.scale] * width
+            stds += [float(noise.get(n, 0.0)) / c.scale] * width
+        self.low = np.array(lows, np.float32)
+        self.high = np.array(highs, np.float32)
+        self._lo64, self._hi64 = self.low.astype(float), self.high.astype(float)
+        self._inv_scale = 1.0 / np.array(scales)
+        self._std = np.array(stds)
+        self._noisy = bool(np.any(self._std > 0))
+        self.size = len(lows)
+        self._ring = np.zeros((self.delay + 1, self.size), np.float32)
+        self._head = 0
+
+    @property
+    def wants_preview(self) -> bool:
+        return "wave_preview" in self.names
+
+    def measure(self, m: Mapping[str, float], rng: np.random.Generator | None) -> np.ndarray:
+        """The (undelayed) observation vector of measurement ``m``: scaled, noisy, finite, clipped."""
+        raw = np.empty(self.size)
+        for src, i, w in self.layout:
+            if w == 1 and src not in ("last_action", "wave_preview"):
+                raw[i] = m.get(src, 0.0)
+            else:
+                raw[i:i + w] = m[src]
+        raw *= self._inv_scale
+        if self._noisy and rng is not None:
+            raw += self._std * rng.standard_normal(self.size)
+        np.nan_to_num(raw, copy=False, nan=0.0, posinf=1e30, neginf=-1e30)
+        np.clip(raw, self._lo64, self._hi64, out=raw)
+        return raw.astype(np.float32)
+
+    def reset(self, m, rng) -> np.ndarray:
+        first = self.measure(m, rng)
+        self._ring[:] = first
+        self._head = 0
+        return first.copy()
+
+    def __call__(self, m, rng) -> np.ndarray:
+        """Push this step's measurement and return the one taken ``delay`` control steps ago."""
+        obs = self.measure(m, rng)
+        if self.delay == 0:
+            return obs
+        self._head = (self._head + 1) % (self.delay + 1)
+        self._ring[self._head] = obs
+        return self._ring[(self._head + 1) % (self.delay + 1)].copy()
+
+
+# =====================================================================================================
+# Sea-state generators (initial-state distribution)
+# =====================================================================================================
+class SeaGenerator:
+    """Protocol: ``gen(rng) -> (SeaState, wave_seed)`` drawing only from ``rng`` (the env's np_random)."""
+
+    def __call__(self, rng: np.random.Generator) -> tuple[SeaState, int]:  # pragma: no cover
+        raise NotImplementedError
+
+
+class RandomCodeSeas(SeaGenerator):
+    """WMO sea-state ``codes`` drawn uniformly; Hs ~ U(code range) and Tp by the ``convention``
+    (``SeaState.from_code(code, convention, rng=rng)``: coastal Tp = c·sqrt(Hs), c ~ U(3.6, 5.0));
+    mean wave heading ~ U(heading_deg ± heading_spread_deg) (180 = head seas); wave seed ~ U[0, 2^31)."""
+
+    def __init__(self, codes: Sequence[int] = (3, 4, 5), convention: str = "coastal", heading_deg: float = 180.0,
+                 heading_spread_deg: float = 30.0, spectrum: str = "jonswap", spreading_s: float | None = None):
+        if len(codes) == 0:
+            raise ValueError("RandomCodeSeas: codes must not be empty")
+        for c in codes:
+            SeaState.from_code(int(c), convention)          # validates code and convention
+        if not (math.isfinite(heading_spread_deg) and heading_spread_deg >= 0):
+            raise ValueError(f"heading_spread_deg must be >= 0 (got {heading_spread_deg!r})")
+        self.codes = tuple(int(c) for c in codes)
+        self.convention = convention
+        self.heading_deg = float(heading_deg)
+        self.heading_spread_deg = float(heading_spread_deg)
+        self.spectrum = spectrum
+        self.spreading_s = spreading_s
+
+    def __call__(self, rng):
+        code = self.codes[int(rng.integers(len(self.codes)))]
+        heading = self.heading_deg + self.heading_spread_deg * float(rng.uniform(-1.0, 1.0))
+        sea = SeaState.from_code(code, self.convention, rng=rng, heading_deg=heading, spectrum=self.spectrum,
+                                 spreading_s=self.spreading_s)
+        return sea, int(rng.integers(2 ** 31))
+
+
+class FixedSeas(SeaGenerator):
+    """A fixed list of ``(SeaState, wave_seed)``: ``order="cycle"`` visits them in turn (episode i gets
+    entry i mod n, whatever the rng), ``"random"`` picks one uniformly from ``rng``."""
+
+    def __init__(self, seas: Sequence[tuple[SeaState, int]], order: str = "cycle"):
+        if len(seas) == 0:
+            raise ValueError("FixedSeas: the list of sea states is empty")
+        if order not in ("cycle", "random"):
+            raise ValueError(f"FixedSeas: order must be 'cycle' or 'random' (got {order!r})")
+        self.seas = [(s, int(seed)) for s, seed in seas]
+        self.order = order
+        self._next = 0
+
+    def __call__(self, rng):
+        if self.order == "random":
+            return self.seas[int(rng.integers(len(self.seas)))]
+        s = self.seas[self._next % len(self.seas)]
+        self._next += 1
+        return s
+
+
+#: headings (deg, 180 = head seas) of the evaluation set, cycled per code
+EVAL_HEADINGS = (180.0, 160.0, 200.0, 180.0)
+
+
+def default_eval_sea_states(codes: Sequence[int] = (3, 4, 5), convention: str = "coastal",
+                            headings: Sequence[float] = EVAL_HEADINGS, spectrum: str = "jonswap"):
+    """The fixed evaluation set (common random numbers): for every code the deterministic preset
+    ``SeaState.from_code(code, convention)`` (coastal: Lee et al. mean Hs, Tp = 4.3·sqrt(Hs)) at each of
+    ``headings``, with wave seed ``1000·code + j`` (j = index of the heading). Same list on every call."""
+    out = []
+    for code in codes:
+        for j, h in enumerate(headings):
+            out.append((SeaState.from_code(int(code), convention, heading_deg=float(h), spectrum=spectrum),
+                        1000 * int(code) + j))
+    return out
+
+
+# =====================================================================================================
+# Rewards
+# =====================================================================================================
+class RewardFn:
+    """Protocol: ``fn(m, action, prev_action) -> (reward, components)``; ``components`` maps names to the
+    (weighted, positive) costs; ``reward = -sum(components)``. ``terminal_cost(steps_left)`` is added by
+    the environment when an episode terminates (not when it is truncated)."""
+
+    def __call__(self, m, action, prev_action):  # pragma: no cover
+        raise NotImplementedError
+
+    def terminal_cost(self, steps_left: int) -> float:
+        return 0.0
+
+
+class HeavePitchReward(RewardFn):
+    """Motion cost plus penalties, per control step::
+
+        cost = w_heave·h² + w_pitch·θ² + w_heave_rate·(ḣ/1 m/s)² + w_pitch_rate·(q/6.28 °/s)²
+             + w_end_stop·(end-stop hits this step) + w_slack·[min tension ≤ slack_tension]
+             + w_over_tension·max(0, (T/T_break − f)/(1 − f)) + w_effort·mean(effort²) + w_action_rate·mean(Δa²)
+
+    h = fish heave (m), θ = fish pitch (rad); rates normalised by the thesis Table 6.1 sonar limits.
+    ``effort`` is the actuator's own effort measure (winch: speed / max speed; compensator: 0 — a
+    semi-active gain change costs no power), ``Δa`` the action change. On termination (cable parted,
+    fish below the floor) a cost ``w_terminal × (steps left + 1)`` is added so that ending an episode
+    early never pays.
+    """
+
+    DEFAULTS = dict(heave=1.0, pitch=30.0, heave_rate=0.5, pitch_rate=0.5, end_stop=1.0, slack=1.0,
+                    over_tension=10.0, effort=0.01, action_rate=0.01, terminal=1.0)
+
+    def __init__(self, weights: Mapping[str, float] | None = None, slack_tension: float = 1.0,
+                 over_tension_fraction: float = 0.5):
+        w = dict(self.DEFAULTS)
+        for k, v in (weights or {}).items():
+            if k not in w:
+                raise ValueError(f"unknown reward weight {k!r}; known: {sorted(w)}")
+            if not (math.isfinite(float(v)) and float(v) >= 0):
+                raise ValueError(f"reward weight {k!r} must be finite and >= 0 (got {v!r})")
+            w[k] = float(v)
+        if not 0.0 <= over_tension_fraction < 1.0:
+            raise ValueError(f"over_tension_fraction must be in [0, 1) (got {over_tension_fraction!r})")
+        self.weights = w
+        self.slack_tension = float(slack_tension)
+        self.over_tension_fraction = float(over_tension_fraction)
+
+    def __call__(self, m, action, prev_action):
+        w = self.weights
+        hr = m["fish_heave_rate"] / HEAVE_RATE_LIMIT
+        pr = m["fish_pitch_rate"] / PITCH_RATE_LIMIT
+        f = self.over_tension_fraction
+        da = np.asarray(action, float) - np.asarray(prev_action, float)
+        eff = m.get("effort", 0.0)
+        c = {
+            "heave": w["heave"] * m["fish_heave"] ** 2,
+            "pitch": w["pitch"] * m["fish_pitch"] ** 2,
+            "heave_rate": w["heave_rate"] * hr * hr,
+            "pitch_rate": w["pitch_rate"] * pr * pr,
+            "end_stop": w["end_stop"] * float(m.get("end_stop_hits", 0)),
+            "slack": w["slack"] * float(m["min_tension"] <= self.slack_tension),
+            "over_tension": w["over_tension"] * max(0.0, (m["tension_ratio"] - f) / (1.0 - f)),
+            "effort": w["effort"] * float(np.mean(np.square(eff))),
+            "action_rate": w["action_rate"] * float(np.mean(da * da)),
+        }
+        total = sum(c.values())
+        if not math.isfinite(total):            # never hand NaN to a learner
+            c = {k: (v if math.isfinite(v) else 1e6) for k, v in c.items()}
+            total = sum(c.values())
+        return -float(total), c
+
+    def terminal_cost(self, steps_left):
+        return self.weights["terminal"] * (int(steps_left) + 1)
+
+
+class HeaveOnlyReward(HeavePitchReward):
+    """Heave (and heave-rate) cost only, with the same safety penalties."""
+
+    def __init__(self, weights=None, **kw):
+        base = dict(pitch=0.0, pitch_rate=0.0)
+        base.update(weights or {})
+        super().__init__(base, **kw)
