@@ -142,12 +142,13 @@ def side_view(result, path, discard: float = 0.0, track=None, snapshots: int = 1
     idx = _snapshot_indices(len(t), snapshots)
     ea = np.stack([np.cos(psi), np.sin(psi)], axis=1)
     fig, ax = plt.subplots(figsize=(9, 6.2))
-    cmap = plt.get_cmap("Blues")
+    base = plt.get_cmap("Blues")
+    cmap = colors.LinearSegmentedColormap.from_list("blues_faded", base(np.linspace(0.25, 1.0, 64)))
     norm = colors.Normalize(vmin=t[idx[0]], vmax=t[idx[-1]] if idx[-1] != idx[0] else t[idx[0]] + 1)
     bcol = _body_colors(list(result.bodies))
     for k, i in enumerate(idx):
         frac = (k + 1) / len(idx)
-        col = cmap(0.25 + 0.75 * frac)
+        col = cmap(norm(t[i]))
         alpha = 0.25 + 0.75 * frac
         for ln, d in result.lines.items():
             p = d["positions"][i]
@@ -214,18 +215,22 @@ def body_motion(result, path, discard: float = 0.0, title: str | None = None):
     t = result.t
     fig, axes = plt.subplots(3, 1, figsize=(10, 7.5), sharex=True)
     bcol = _body_colors(list(result.bodies))
+    after = t >= discard if np.any(t >= discard) else np.ones(len(t), bool)
     for bn, d in result.bodies.items():
-        axes[0].plot(t, d["heave"], color=bcol[bn], lw=1.0, label=bn)
+        # heave and surge about their mean after the start-up window (bodies sit tens of m apart)
+        hm, sm = float(np.mean(d["heave"][after])), float(np.mean(d["surge"][after]))
+        axes[0].plot(t, d["heave"] - hm, color=bcol[bn], lw=1.0, label=f"{bn} (mean {hm:.1f} m)")
         axes[1].plot(t, np.degrees(d["euler"][:, 1]), color=bcol[bn], lw=1.0, label=bn)
-        axes[2].plot(t, d["surge"], color=bcol[bn], lw=1.0, label=bn)
-    labels = ["heave (m, rel. to mean tow point)", "pitch (deg, + nose down)", "surge (m, rel. to mean tow point)"]
+        axes[2].plot(t, d["surge"] - sm, color=bcol[bn], lw=1.0, label=f"{bn} (mean {sm:.1f} m)")
+    labels = ["heave − mean (m)", "pitch (deg, + nose down)", "surge − mean (m)"]
     for ax, lab in zip(axes, labels):
         _shade(ax, result, discard)
         ax.set_ylabel(lab, fontsize=9)
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="best", fontsize=9, ncol=max(1, len(result.bodies)))
+    axes[0].legend(loc="upper right", fontsize=8, ncol=max(1, len(result.bodies)))
+    axes[2].legend(loc="upper right", fontsize=8, ncol=max(1, len(result.bodies)))
     axes[-1].set_xlabel("time (s)" + (" — grey: start-up window excluded from statistics" if discard else ""))
-    fig.suptitle(title or "Body motions")
+    fig.suptitle(title or "Body motions (heave/surge relative to the mean tow-point path, up/ahead positive)")
     fig.tight_layout()
     return _save(fig, path)
 
@@ -260,20 +265,30 @@ def psd(result, path, discard: float = 0.0, title: str | None = None):
     fig, axes = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     bcol = _body_colors(list(result.bodies))
     xmax = 0.0
-    if len(w.t) >= 16:
+    n = len(w.t)
+    if n >= 16:
         dtr = float(np.median(np.diff(w.t)))
         nyq = math.pi / dtr
+        # segments as long as possible while keeping >= ~4 half-overlapping ones (frequency resolution
+        # matters more than variance for short deterministic-looking records)
+        nperseg = max(16, 1 << int(math.floor(math.log2(max(16, n / 2.5)))))
+        peaks = [0.0, 0.0]
         for bn, d in w.bodies.items():
-            for ax, x in ((axes[0], d["heave"]), (axes[1], np.degrees(d["euler"][:, 1]))):
-                om, S = welch_psd(np.asarray(x, float), dtr)
+            for k, (ax, x) in enumerate(((axes[0], d["heave"]), (axes[1], np.degrees(d["euler"][:, 1])))):
+                om, S = welch_psd(np.asarray(x, float), dtr, nperseg=min(nperseg, n))
                 if not np.any(S > 0):
                     continue
                 ax.semilogy(om, S, color=bcol[bn], lw=1.0, label=bn)
+                peaks[k] = max(peaks[k], float(S.max()))
                 c = np.cumsum(S)
                 xmax = max(xmax, float(om[min(len(om) - 1, np.searchsorted(c, 0.995 * c[-1]))]))
         xmax = min(nyq, max(2.0, 2.0 * xmax))
         axes[0].set_xlim(0, xmax)
-        note = f"Welch PSD over t = {w.t[0]:.0f}–{w.t[-1]:.0f} s"
+        for ax, pk in zip(axes, peaks):
+            if pk > 0:
+                ax.set_ylim(pk * 1e-6, pk * 3.0)
+        note = (f"Welch PSD over t = {w.t[0]:.0f}–{w.t[-1]:.0f} s "
+                f"(segments of {min(nperseg, n) * dtr:.0f} s, Δω = {2 * math.pi / (min(nperseg, n) * dtr):.2f} rad/s)")
     else:
         note = "record after the start-up window too short for a spectrum"
         for ax in axes:

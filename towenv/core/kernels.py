@@ -388,6 +388,75 @@ def body_mass_blocks(b, bp, att, atr, arr):
 
 
 @njit(cache=True)
+def condense_body(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
+                  mnode, fnode):
+    """Condense rigid body ``b`` onto its tow-point node ``a`` (model.md 3.4, Schur complement).
+
+    On entry ``fb``/``mb`` hold the body-axis loads from :func:`body_loads`; ``tail_force`` (global) is
+    the reaction of a series-tow tail cable at the aft tow point. Adds the rigid-body Coriolis and
+    centripetal terms, forms A = M_RB + M_A about the tow point, and adds ``Λᵀ A_eff Λ`` to the node
+    mass and ``Λᵀ (F − A_tr A_rr⁻¹ M)`` to the node force. Returns ``X = A_rr⁻¹ A_rt`` and
+    ``y = A_rr⁻¹ M`` so that afterwards ``ω̇ = y − X a`` (a = Λ r̈). False if A_rr is singular."""
+    if has_tail:
+        f0 = lam[0, 0] * tail_force[0] + lam[0, 1] * tail_force[1] + lam[0, 2] * tail_force[2]
+        f1 = lam[1, 0] * tail_force[0] + lam[1, 1] * tail_force[1] + lam[1, 2] * tail_force[2]
+        f2 = lam[2, 0] * tail_force[0] + lam[2, 1] * tail_force[1] + lam[2, 2] * tail_force[2]
+        fb[0] += f0
+        fb[1] += f1
+        fb[2] += f2
+        _cross(bp[b, 26], bp[b, 27], bp[b, 28], f0, f1, f2, tmp3)
+        for i in range(3):
+            mb[i] += tmp3[i]
+    # Coriolis / centripetal terms to the right-hand side
+    mass = bp[b, 0]
+    _cross(w[0], w[1], w[2], bp[b, 4], bp[b, 5], bp[b, 6], tmp3)
+    wx0 = tmp3[0]
+    wx1 = tmp3[1]
+    wx2 = tmp3[2]
+    _cross(w[0], w[1], w[2], wx0, wx1, wx2, tmp3)
+    for i in range(3):
+        fb[i] -= mass * tmp3[i]
+    body_mass_blocks(b, bp, att, atr, arr)
+    # I_o ω (rigid part only: arr minus added inertia)
+    for i in range(3):
+        hvec[i] = 0.0
+        for j in range(3):
+            hvec[i] += arr[i, j] * w[j]
+        hvec[i] -= bp[b, 23 + i] * w[i]
+    _cross(w[0], w[1], w[2], hvec[0], hvec[1], hvec[2], tmp3)
+    for i in range(3):
+        mb[i] -= tmp3[i]
+    if not _inv3(arr, arrinv):
+        return False
+    # X = A_rr⁻¹ A_rt (A_rt = A_trᵀ), y = A_rr⁻¹ M
+    for i in range(3):
+        y[i] = arrinv[i, 0] * mb[0] + arrinv[i, 1] * mb[1] + arrinv[i, 2] * mb[2]
+        for j in range(3):
+            X[i, j] = arrinv[i, 0] * atr[j, 0] + arrinv[i, 1] * atr[j, 1] + arrinv[i, 2] * atr[j, 2]
+    # A_eff = A_tt − A_tr X ;  f_eff = F − A_tr y
+    for i in range(3):
+        fi = fb[i]
+        for k in range(3):
+            fi -= atr[i, k] * y[k]
+        tmp3[i] = fi
+        for j in range(3):
+            e = att[i, j]
+            for k in range(3):
+                e -= atr[i, k] * X[k, j]
+            aeff[i, j] = e
+    # global: M += Λᵀ A_eff Λ ; F += Λᵀ f_eff
+    for i in range(3):
+        for j in range(3):
+            sacc = 0.0
+            for k in range(3):
+                for m in range(3):
+                    sacc += lam[k, i] * aeff[k, m] * lam[m, j]
+            mnode[a, i, j] += sacc
+        fnode[a, i] += lam[0, i] * tmp3[0] + lam[1, i] * tmp3[1] + lam[2, i] * tmp3[2]
+    return True
+
+
+@njit(cache=True)
 def euler_rates_to_omega(ang, dang, out):
     """Body rates (p, q, r) from Euler angles (roll, pitch, yaw) and their time derivatives."""
     cb = math.cos(ang[0])
@@ -795,64 +864,11 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             if c >= 0:
                 node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
                               mnode, fnode, react)
-                f0 = lam[0, 0] * react[0] + lam[0, 1] * react[1] + lam[0, 2] * react[2]
-                f1 = lam[1, 0] * react[0] + lam[1, 1] * react[1] + lam[1, 2] * react[2]
-                f2 = lam[2, 0] * react[0] + lam[2, 1] * react[1] + lam[2, 2] * react[2]
-                fb[0] += f0
-                fb[1] += f1
-                fb[2] += f2
-                _cross(bp[b, 26], bp[b, 27], bp[b, 28], f0, f1, f2, tmp3)
-                for i in range(3):
-                    mb[i] += tmp3[i]
-            # Coriolis / centripetal terms to the right-hand side
-            mass = bp[b, 0]
-            _cross(w[0], w[1], w[2], bp[b, 4], bp[b, 5], bp[b, 6], tmp3)
-            wx0 = tmp3[0]
-            wx1 = tmp3[1]
-            wx2 = tmp3[2]
-            _cross(w[0], w[1], w[2], wx0, wx1, wx2, tmp3)
-            for i in range(3):
-                fb[i] -= mass * tmp3[i]
-            body_mass_blocks(b, bp, att, atr, arr)
+            if not condense_body(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
+                                 tmp33b, bX[b], by[b], mnode, fnode):
+                return FAIL_NAN, it, -1, 0.0
             for i in range(3):
                 bkc[b, 6 + i] = arr[i, i]
-            # I_o ω (rigid part only: arr minus added inertia)
-            for i in range(3):
-                hvec[i] = 0.0
-                for j in range(3):
-                    hvec[i] += arr[i, j] * w[j]
-                hvec[i] -= bp[b, 23 + i] * w[i]
-            _cross(w[0], w[1], w[2], hvec[0], hvec[1], hvec[2], tmp3)
-            for i in range(3):
-                mb[i] -= tmp3[i]
-            if not _inv3(arr, arrinv):
-                return FAIL_NAN, it, -1, 0.0
-            # X = A_rr⁻¹ A_rt (A_rt = A_trᵀ), y = A_rr⁻¹ M
-            X = bX[b]
-            for i in range(3):
-                by[b, i] = arrinv[i, 0] * mb[0] + arrinv[i, 1] * mb[1] + arrinv[i, 2] * mb[2]
-                for j in range(3):
-                    X[i, j] = arrinv[i, 0] * atr[j, 0] + arrinv[i, 1] * atr[j, 1] + arrinv[i, 2] * atr[j, 2]
-            # A_eff = A_tt − A_tr X ;  f_eff = F − A_tr y
-            for i in range(3):
-                fi = fb[i]
-                for k in range(3):
-                    fi -= atr[i, k] * by[b, k]
-                tmp3[i] = fi
-                for j in range(3):
-                    e = att[i, j]
-                    for k in range(3):
-                        e -= atr[i, k] * X[k, j]
-                    tmp33b[i, j] = e
-            # global: M += Λᵀ A_eff Λ ; F += Λᵀ f_eff
-            for i in range(3):
-                for j in range(3):
-                    sacc = 0.0
-                    for k in range(3):
-                        for m in range(3):
-                            sacc += lam[k, i] * tmp33b[k, m] * lam[m, j]
-                    mnode[a, i, j] += sacc
-                fnode[a, i] += lam[0, i] * tmp3[0] + lam[1, i] * tmp3[1] + lam[2, i] * tmp3[2]
             # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
             for i in range(3):
                 for j in range(3):

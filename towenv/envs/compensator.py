@@ -1,0 +1,111 @@
+"""``towenv/CompensatorGains-v0``: tune a passive heave compensator's stiffness and damping online.
+
+The agent acts as a semi-active controller: every control step it sets the spring stiffness k and the
+damping b of the passive compensator at the vessel sheave (``Simulator.set_compensator``), within the
+scene's ``[compensator] stiffness_bounds`` / ``damping_bounds``.
+
+Action ``a ∈ [-1, 1]²`` is mapped **logarithmically** (the ranges span decades; rl-conventions §4)::
+
+    k = k_lo · (k_hi / k_lo) ** ((a0 + 1) / 2)        b = b_lo · (b_hi / b_lo) ** ((a1 + 1) / 2)
+
+with ``[k_lo, k_hi]``/``[b_lo, b_hi]`` the scene's bounds, except that a lower bound of 0 cannot be
+log-mapped: it is replaced by a small positive floor, ``stiffness_floor`` / ``damping_floor`` (default
+1e-3 × the upper bound; for the default scene b ∈ [50, 50 000] N s/m, so a = −1 gives 50 N s/m, not 0).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .base import TowEnv
+
+__all__ = ["CompensatorGainsEnv"]
+
+
+class CompensatorGainsEnv(TowEnv):
+    """Semi-active heave compensation by online (k, b) tuning. See ``docs/environments.md``.
+
+    Extra keywords: ``stiffness_floor`` and ``damping_floor`` (N/m, N s/m) — positive floors used for
+    the log map when a scene bound is 0 (default 1e-3 × the upper bound). The scene's compensator is
+    put in ``passive`` mode (the gains act only there)."""
+
+    DEFAULT_OBSERVATIONS = ("tow_vel_z", "tow_acc_z", "top_tension", "comp_stroke", "comp_stroke_vel",
+                            "fish_heave", "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "last_action")
+    ACTION_DIM = 2
+
+    def __init__(self, *, stiffness_floor: float | None = None, damping_floor: float | None = None, **kwargs):
+        self.stiffness_floor = stiffness_floor
+        self.damping_floor = damping_floor
+        super().__init__(**kwargs)
+
+    # ------------------------------------------------------------------ hooks
+    def _prepare_scene(self, scene):
+        if scene.compensator is None:
+            raise ValueError(f"CompensatorGainsEnv: scene {scene.name!r} has no [compensator] section")
+        if scene.compensator.mode != "passive":
+            scene = scene.with_overrides({"compensator.mode": "passive"})
+        return scene
+
+    @staticmethod
+    def _log_range(bounds, floor, what):
+        lo, hi = float(bounds[0]), float(bounds[1])
+        if hi <= 0:
+            raise ValueError(f"CompensatorGainsEnv: the {what} upper bound must be > 0 (got {bounds})")
+        f = 1e-3 * hi if floor is None else float(floor)
+        if not (math.isfinite(f) and 0 < f <= hi):
+            raise ValueError(f"CompensatorGainsEnv: {what}_floor must be in (0, {hi:g}] (got {floor!r})")
+        lo_eff = lo if lo > 0 else f
+        return lo_eff, hi, lo, hi
+
+    def _check_actuator(self, sim):
+        c = sim.scene.compensator
+        self._k_map = self._log_range(c.stiffness_bounds, self.stiffness_floor, "stiffness")
+        self._b_map = self._log_range(c.damping_bounds, self.damping_floor, "damping")
+        self._half_stroke = 0.5 * float(c.stroke)
+
+    @staticmethod
+    def _to_gain(a, mp):
+        lo, hi, blo, bhi = mp
+        if hi <= lo:
+            return min(max(lo, blo), bhi)
+        return min(max(lo * (hi / lo) ** (0.5 * (a + 1.0)), blo), bhi)
+
+    @staticmethod
+    def _to_action(g, mp):
+        lo, hi = mp[0], mp[1]
+        if hi <= lo or g <= 0:
+            return -1.0
+        return float(np.clip(2.0 * math.log(g / lo) / math.log(hi / lo) - 1.0, -1.0, 1.0))
+
+    def gains(self, action) -> tuple[float, float]:
+        """(stiffness N/m, damping N s/m) of an action in [-1, 1]²."""
+        a = np.clip(np.asarray(action, float).reshape(2), -1.0, 1.0)
+        return self._to_gain(float(a[0]), self._k_map), self._to_gain(float(a[1]), self._b_map)
+
+    def action_of(self, stiffness: float, damping: float) -> np.ndarray:
+        """Inverse of :meth:`gains` (clipped to [-1, 1])."""
+        return np.array([self._to_action(stiffness, self._k_map), self._to_action(damping, self._b_map)])
+
+    def _apply_action(self, a):
+        k, b = self.gains(a)
+        self.sim.set_compensator(stiffness=k, damping=b)
+
+    def _actuator_reset(self):
+        self._check_actuator(self.sim)          # bounds are per configuration (same for all by default)
+        self._hits = 0
+
+    def _reset_action(self):
+        cs = self.sim.compensator_state()
+        return self.action_of(cs["stiffness"], cs["damping"])
+
+    def _measure_actuator(self, m, action):
+        cs = self.sim.compensator_state()
+        hits = int(cs["hits"])
+        m["comp_stroke"] = cs["stroke"] / self._half_stroke
+        m["comp_stroke_vel"] = cs["stroke_velocity"]
+        m["end_stop_hits"] = max(0, hits - self._hits)
+        self._hits = hits
+        m["comp_stiffness"] = cs["stiffness"]
+        m["comp_damping"] = cs["damping"]
+        m["effort"] = 0.0
