@@ -164,7 +164,14 @@ def cmd_simulate(args) -> int:
         return _error(_one_line(exc))
 
     duration = float(args.duration)
-    discard = default_discard(sim.scene, duration) if args.discard is None else float(args.discard)
+    if args.discard is None:
+        discard = default_discard(sim.scene, duration)
+        if discard >= duration:
+            print(f"towenv: warning: the run ({duration:g} s) is not longer than the start-up window "
+                  f"({discard:g} s); statistics use the second half of the run", file=sys.stderr)
+            discard = 0.5 * duration
+    else:
+        discard = float(args.discard)
     if discard >= duration:
         return _error(f"--discard ({discard:g} s) must be shorter than --duration ({duration:g} s)")
     out = Path(args.out) if args.out else Path("out") / _out_name(args.scene, sim.scene)

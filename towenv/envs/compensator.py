@@ -80,8 +80,8 @@ class CompensatorGainsEnv(TowEnv):
 
     def gains(self, action) -> tuple[float, float]:
         """(stiffness N/m, damping N s/m) of an action in [-1, 1]²."""
-        a = np.clip(np.asarray(action, float).reshape(2), -1.0, 1.0)
-        return self._to_gain(float(a[0]), self._k_map), self._to_gain(float(a[1]), self._b_map)
+        a0, a1 = (min(max(float(x), -1.0), 1.0) for x in np.asarray(action, float).reshape(2))
+        return self._to_gain(a0, self._k_map), self._to_gain(a1, self._b_map)
 
     def action_of(self, stiffness: float, damping: float) -> np.ndarray:
         """Inverse of :meth:`gains` (clipped to [-1, 1])."""
