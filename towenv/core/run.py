@@ -34,7 +34,8 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
     bar = None
     if progress:
         from tqdm import tqdm
-        bar = tqdm(total=round(n_steps * dt, 3), unit="s", desc="simulating", leave=False)
+        bar = tqdm(total=n_steps, unit="step", desc=f"simulating {n_steps * dt:g} s", leave=False,
+                   unit_scale=False, dynamic_ncols=True)
     wall0 = time.perf_counter()
     done = 0
     while done < n_steps:
@@ -44,7 +45,7 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
         if k == every:
             rec.record()
         if bar is not None:
-            bar.update(round(k * dt, 3))
+            bar.update(k)
     wall = time.perf_counter() - wall0
     if bar is not None:
         bar.close()
