@@ -38,3 +38,21 @@ def test_explicit_rejects_bad_options():
         ExplicitSimulator(peer_deck(), scheme="leapfrog")
     with pytest.raises(ValueError, match="axial_damping_ratio"):
         ExplicitSimulator(peer_deck(), axial_damping_ratio=-1.0)
+
+
+def test_solver_method_selects_the_integrator():
+    """One interface: the scene's solver.method picks Houbolt, an explicit scheme or the quasi-static
+    sequence; all agree on a steady tow (the quasi-static sequence exactly, the others to 1e-4)."""
+    from towenv.core.explicit import ExplicitSimulator
+    from towenv.core.quasistatic import QuasiStaticSimulator
+    ref = towenv.simulate(peer_deck(speed=2.0, dt=0.05), duration=5.0).top_tension[-1]
+    rk4 = towenv.make_simulator(peer_deck(speed=2.0, dt=1.6e-3), method="rk4", axial_damping_ratio=0.1)
+    assert isinstance(rk4, ExplicitSimulator)
+    rk4.advance(5.0)
+    assert rk4.top_tension == pytest.approx(ref, rel=1e-4)
+    qs = towenv.make_simulator(peer_deck(speed=2.0, dt=0.5), method="quasi_static")
+    assert isinstance(qs, QuasiStaticSimulator)
+    qs.advance(5.0)
+    assert qs.top_tension == pytest.approx(ref, rel=1e-6)
+    with pytest.raises(towenv.SceneError, match="solver.method"):
+        towenv.make_simulator(peer_deck(), method="leapfrog")

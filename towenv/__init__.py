@@ -12,7 +12,7 @@ __version__ = "0.1.0"
 
 from .errors import SimulationDivergence  # noqa: F401
 from .core.result import Result  # noqa: F401
-from .core.run import simulate  # noqa: F401
+from .core.run import make_simulator, simulate  # noqa: F401
 from .core.simulator import Simulator, Snapshot, time_step_guide  # noqa: F401
 try:
     from .scene import Scene, SceneError, list_scenes, load_scene  # noqa: F401

@@ -963,7 +963,11 @@ _TAG_CLASSES = {
 # Solver
 # =====================================================================================================
 class Solver(_Model):
-    """Time step and Newton-iteration settings."""
+    """Time integration (``method``: ``houbolt`` — implicit, Newton on the tensions, the default;
+    ``euler`` / ``rk2`` / ``rk4`` — explicit, needs Δt below the axial CFL limit; ``quasi_static`` —
+    static equilibrium at every step), time step and Newton-iteration settings."""
+    method: _choice("houbolt", "euler", "rk2", "rk4", "quasi_static") = "houbolt"
+    axial_damping_ratio: Num(ge=0, le=10) = 0.0
     dt: Num(ge=1e-5, le=1, unit="s") = 0.02
     tolerance: Num(gt=0, unit="N") = 0.5
     relative_tolerance: Num(ge=0, lt=1) = 1e-5

@@ -9,6 +9,26 @@ from .result import Result
 from .simulator import Simulator
 
 
+def make_simulator(scene, **overrides) -> Simulator:
+    """A simulator for ``scene`` using the time integration named by its ``solver.method``
+    (overridable: ``make_simulator(scene, method="rk2")``)."""
+    from .simulator import load
+    solver_keys = ("method", "dt", "tolerance", "relative_tolerance", "angle_tolerance", "max_iterations",
+                   "max_step_cuts", "max_strain", "settle_time", "axial_damping_ratio")
+    sc = load(scene, {("solver." + k if k in solver_keys else k): v for k, v in overrides.items()}
+              if overrides else None)
+    method = sc.solver.method
+    if method == "houbolt":
+        return Simulator(sc)
+    if method in ("euler", "rk2", "rk4"):
+        from .explicit import ExplicitSimulator
+        return ExplicitSimulator(sc, scheme=method, axial_damping_ratio=sc.solver.axial_damping_ratio)
+    if method == "quasi_static":
+        from .quasistatic import QuasiStaticSimulator
+        return QuasiStaticSimulator(sc)
+    raise ValueError(f"solver.method: must be one of houbolt, euler, rk2, rk4, quasi_static (got {method!r})")
+
+
 def simulate(scene, duration: float, record_interval: float | None = None, progress: bool = False,
              **overrides) -> Result:
     """Simulate ``scene`` (path, dict, embedded name or Scene) for ``duration`` seconds.
@@ -19,7 +39,7 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
     """
     if not (duration > 0):
         raise ValueError(f"duration: must be > 0 s (got {duration})")
-    sim = scene if isinstance(scene, Simulator) else Simulator(scene, **overrides)
+    sim = scene if isinstance(scene, Simulator) else make_simulator(scene, **overrides)
     dt = sim.dt
     if record_interval is None:
         every = max(1, int(round(0.05 / dt)))

@@ -1,0 +1,43 @@
+"""Quasi-static sequence: at every step the system takes the static equilibrium for the current tow-point
+position and velocity (no inertia, no added mass; drag from the tow-point velocity). The cheapest
+"solver" behind the common interface, for slow manoeuvres and for charting what dynamics adds.
+
+Bodies, junctions and series tows are handled by the same discrete static march as the start
+configuration (:mod:`towenv.core.statics`); vessel oscillations enter only through the tow-point
+velocity in the drag. Compensator and winch are not supported.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import kernels as K
+from .simulator import Simulator
+from .statics import quasi_static
+
+
+class QuasiStaticSimulator(Simulator):
+    """Same interface as :class:`Simulator`; each step re-solves the static equilibrium."""
+
+    def __init__(self, scene, **overrides):
+        super().__init__(scene, **overrides)
+        if self.comp[K.C_MODE] > 0 or self.winch[K.W_MODE] > 0:
+            raise ValueError("QuasiStaticSimulator: scenes with a compensator or winch are not supported")
+
+    def _run(self, tops, dt, t_start):
+        s = self.system
+        prev = self.hist_r[0, s.top_node].copy()
+        for k in range(len(tops)):
+            u = (tops[k] - prev) / dt
+            r, T, ang = quasi_static(s, tops[k], u)
+            self.hist_r[2] = self.hist_r[1]
+            self.hist_r[1] = self.hist_r[0]
+            self.hist_r[0] = r
+            self.hist_ang[2] = self.hist_ang[1]
+            self.hist_ang[1] = self.hist_ang[0]
+            self.hist_ang[0] = ang
+            self.tens_hist[1] = self.tens_hist[0]
+            self.tens_hist[0] = T
+            prev = tops[k]
+            self.counters[0] += 1
+            self.counters[1] += 1
+            self._static_reaction(u)
