@@ -144,3 +144,41 @@ def test_constant_tension_winch_pays_out_above_set_tension():
     sim = towenv.Simulator(d)
     sim.advance(20.0)
     assert sim.winch_state()["paid_out"] < -0.5         # below the set tension: hauls in
+
+
+def test_active_position_mode_follows_command_with_lag_and_rate_limit():
+    """Active sheave-position mode: first-order lag τ and rate limit on the commanded stroke."""
+    d, _ = _comp_deck(1.0, 0.0, 0.0, mode="position", amplitude=0.0)
+    d["compensator"].update(actuator_time_constant=0.5, rate_limit=0.2)
+    sim = towenv.Simulator(d)
+    sim.set_compensator(command=0.5)
+    sim.advance(1.0)
+    z1 = sim.compensator_state()["stroke"]
+    assert z1 == pytest.approx(0.2 * 1.0, abs=0.011)          # rate-limited ramp: 0.2 m/s
+    sim.advance(10.0)
+    assert sim.compensator_state()["stroke"] == pytest.approx(0.5, abs=1e-3)   # settled on the command
+
+
+def test_active_force_mode_moves_the_sheave_by_force_over_stiffness():
+    """Force mode adds the (lagged) commanded force to the passive law: a static extra force F on a
+    spring k moves the sheave by F/k."""
+    d, _ = _comp_deck(1.0, 2e4, 2e4, mode="force", amplitude=0.0)
+    d["compensator"].update(rate_limit=1e4)             # N/s in force mode
+    sim = towenv.Simulator(d)
+    sim.set_compensator(command=2000.0)
+    sim.advance(60.0)
+    assert sim.compensator_state()["stroke"] == pytest.approx(2000.0 / 2e4, rel=0.02)
+
+
+def test_winch_respects_length_limits():
+    d = _winch_deck(0.05)
+    d["winch"].update(max_length=104.0, min_length=98.0)
+    sim = towenv.Simulator(d)
+    sim.set_winch(speed=1.0)
+    sim.advance(30.0)
+    assert sim.winch_state()["length"] == pytest.approx(104.0, abs=1e-9)
+    sim.set_winch(speed=-1.0)
+    sim.advance(30.0)
+    assert sim.winch_state()["length"] == pytest.approx(98.0, abs=1e-9)
+    with pytest.raises(ValueError, match="winch.speed"):
+        sim.set_winch(speed=5.0)

@@ -1034,7 +1034,7 @@ class Compensator(_Model):
     stiffness_bounds: tuple[Num(ge=0, unit="N/m"), Num(ge=0, unit="N/m")] = (0.0, 1.0e6)
     damping_bounds: tuple[Num(ge=0, unit="N s/m"), Num(ge=0, unit="N s/m")] = (0.0, 1.0e6)
     actuator_time_constant: Num(gt=0, unit="s") = 0.2
-    rate_limit: Num(gt=0) = 1.0
+    rate_limit: Num(gt=0) = 1.0                     # m/s in position mode, N/s in force mode
 
     @model_validator(mode="after")
     def _check(self):

@@ -139,6 +139,7 @@ class TowEnv(gym.Env):
             raise ValueError(f"body {body!r}: {exc.args[0]}") from None
         self._check_actuator(self.sim)
 
+        self._wants_preview = bool(getattr(self.observer, "wants_preview", False))
         self.action_space = spaces.Box(-1.0, 1.0, (self.ACTION_DIM,), np.float32)
         self.observation_space = spaces.Box(self.observer.low, self.observer.high, dtype=np.float32)
         self._steps = 0
@@ -241,8 +242,10 @@ class TowEnv(gym.Env):
         return obs, info
 
     def step(self, action):
-        a = np.asarray(action, dtype=float).reshape(self.ACTION_DIM)
-        a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
+        a = np.array(action, dtype=float).reshape(self.ACTION_DIM)      # a copy: the caller's array is kept
+        if not np.isfinite(a).all():
+            a = np.nan_to_num(a, nan=0.0)
+        np.clip(a, -1.0, 1.0, out=a)
         sim = self.sim
         self._apply_action(a)
         failure = None
@@ -281,64 +284,62 @@ class TowEnv(gym.Env):
         return getattr(self.reward_fn, "slack_tension", 1.0)
 
     def _tension_layout(self, sim):
-        """(segment index arrays, inverse breaking loads, inverse load at the tow point) for sim.system."""
+        """(per-segment 1/breaking load, 1/breaking load at the tow point, [(line, segments, 1/load)]) for
+        ``sim.system`` (rebuilt when the winch remeshes the system)."""
         system = sim.system
         if self._tension_cache[0] is system:
             return self._tension_cache[1]
         bl = self.breaking_load
-        idx, inv, names = [], [], []
+        inv_seg = np.zeros(system.n_segments)
+        lines = []
         top_inv = 0.0
         for ln in system.lines:
             load = bl.get(ln.name) if isinstance(bl, Mapping) else bl
             if load is None:
                 continue
-            idx.append(np.asarray(ln.segments, int))
-            inv.append(1.0 / float(load))
-            names.append(ln.name)
+            segs = np.asarray(ln.segments, int)
+            inv_seg[segs] = 1.0 / float(load)
+            lines.append((ln.name, segs, 1.0 / float(load)))
             if len(ln.nodes) and int(ln.nodes[0]) == int(system.top_node):
                 top_inv = max(top_inv, 1.0 / float(load))
-        lay = (idx, inv, names, top_inv)
+        lay = (inv_seg, top_inv, lines)
         self._tension_cache = (system, lay)
         return lay
 
     def _measure(self, action) -> dict:
         sim = self.sim
         dt = sim.dt
-        zt = sim.hist_r[:, sim.system.top_node, 2]
+        hr = sim.hist_r
+        top = sim.system.top_node
+        z0, z1, z2 = float(hr[0, top, 2]), float(hr[1, top, 2]), float(hr[2, top, 2])
         b = sim.body_state(self.body)
         T = sim.tensions
         t_top = sim.top_tension
-        idx, inv, _, top_inv = self._tension_layout(sim)
-        ratio = t_top * top_inv
-        for i, k in zip(idx, inv):
-            if i.size:
-                ratio = max(ratio, float(T[i].max()) * k)
-        z = float(b["position"][2])
+        inv_seg, top_inv, _ = self._tension_layout(sim)
+        ratio = max(t_top * top_inv, float((T * inv_seg).max()))
+        pos, vel = b["position"], b["velocity"]
+        z = float(pos[2])
         m = {
             "t": sim.t,
-            "tow_vel_z": float((3.0 * zt[0] - 4.0 * zt[1] + zt[2]) / (2.0 * dt)),
-            "tow_acc_z": float((zt[0] - 2.0 * zt[1] + zt[2]) / (dt * dt)),
+            "tow_vel_z": (3.0 * z0 - 4.0 * z1 + z2) / (2.0 * dt),
+            "tow_acc_z": (z0 - 2.0 * z1 + z2) / (dt * dt),
             "top_tension": t_top,
             "top_tension_ratio": t_top / self._T_ref,
             "fish_heave": z - self._z_ref,
             "fish_depth": -z,
             "fish_pitch": float(b["euler"][1]),
-            "fish_heave_rate": float(b["velocity"][2]),
+            "fish_heave_rate": float(vel[2]),
             "fish_pitch_rate": float(b["omega"][1]),
             "min_tension": float(T.min()),
-            "tension_ratio": float(ratio),
+            "tension_ratio": ratio,
             "last_action": action,
             "time_left": 1.0 - self._steps / self.max_steps,
         }
         self._measure_actuator(m, action)
-        if self.observer_wants_preview:
+        if self._wants_preview:
             m["wave_preview"] = self._wave_preview(sim)
         self._last_m = m
         return m
-
-    @property
-    def observer_wants_preview(self) -> bool:
-        return bool(getattr(self.observer, "wants_preview", False))
 
     def _wave_preview(self, sim):
         """Wave elevation now at ``preview_distances`` ahead of the tow point along the ship's heading
@@ -358,10 +359,12 @@ class TowEnv(gym.Env):
 
     def _terminal(self, m):
         if m["tension_ratio"] >= 1.0:
-            idx, inv, names, top_inv = self._tension_layout(self.sim)
+            _, top_inv, lines = self._tension_layout(self.sim)
             T = self.sim.tensions
-            which = [n for i, k, n in zip(idx, inv, names) if i.size and float(T[i].max()) * k >= 1.0]
-            return True, f"cable_parted: tension above the breaking load ({', '.join(which) or 'tow point'})"
+            which = [n for n, segs, k in lines if segs.size and float(T[segs].max()) * k >= 1.0]
+            if self.sim.top_tension * top_inv >= 1.0:
+                which.append("tow point")
+            return True, f"cable_parted: tension above the breaking load ({', '.join(dict.fromkeys(which))})"
         if self.floor_depth is not None and m["fish_depth"] > self.floor_depth:
             return True, f"{self.body}_below_floor: depth {m['fish_depth']:.1f} m > {self.floor_depth:g} m"
         return False, None

@@ -148,6 +148,7 @@ class Observer:
         self._std = np.array(stds)
         self._noisy = bool(np.any(self._std > 0))
         self.size = len(lows)
+        self._plan = [(src, src not in ("last_action", "wave_preview")) for src, _, _ in self.layout]
         self._ring = np.zeros((self.delay + 1, self.size), np.float32)
         self._head = 0
 
@@ -157,12 +158,13 @@ class Observer:
 
     def measure(self, m: Mapping[str, float], rng: np.random.Generator | None) -> np.ndarray:
         """The (undelayed) observation vector of measurement ``m``: scaled, noisy, finite, clipped."""
-        raw = np.empty(self.size)
-        for src, i, w in self.layout:
-            if w == 1 and src not in ("last_action", "wave_preview"):
-                raw[i] = m.get(src, 0.0)
+        vals: list = []
+        for src, scalar in self._plan:
+            if scalar:
+                vals.append(m.get(src, 0.0))
             else:
-                raw[i:i + w] = m[src]
+                vals.extend(m[src])
+        raw = np.array(vals, dtype=float)
         raw *= self._inv_scale
         if self._noisy and rng is not None:
             raw += self._std * rng.standard_normal(self.size)
@@ -318,8 +320,8 @@ class HeavePitchReward(RewardFn):
         hr = m["fish_heave_rate"] / HEAVE_RATE_LIMIT
         pr = m["fish_pitch_rate"] / PITCH_RATE_LIMIT
         f = self.over_tension_fraction
-        n = len(action)
-        da2 = sum((float(a) - float(b)) ** 2 for a, b in zip(action, prev_action)) / max(n, 1)
+        da = np.subtract(action, prev_action)
+        da2 = float(da @ da) / max(da.size, 1)
         eff = m.get("effort", 0.0)
         eff2 = float(eff) ** 2 if np.ndim(eff) == 0 else float(np.mean(np.square(eff)))
         c = {
