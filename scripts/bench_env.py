@@ -1,6 +1,6 @@
 """Benchmark of the Gymnasium environments (towenv.envs): steps/s, reset time, vector-env throughput.
 
-One process, one core (``torch`` is not imported; numba kernels are warmed up first). For each
+One process, one core (numba kernels warmed up first; SB3/torch imported only for the last comparison). For each
 environment id at the default 10 Hz control / 0.05 s physics step (2 sub-steps per control step):
 
 * env steps/s, unwrapped env and ``gym.make`` (with Gymnasium's checker/order wrappers), random actions
@@ -21,16 +21,24 @@ import platform
 import statistics
 import time
 
-import numpy as np
+# one core: keep BLAS/OpenMP/numba to a single thread (OpenBLAS would otherwise spin a second thread in
+# the vessel-motion matrix products, which doubles the CPU time without helping)
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+
+import numpy as np  # noqa: E402
 
 
 def _median_rate(fn, n, repeats):
-    rates = []
+    """(median, min, max) of n / time over ``repeats`` runs, by process CPU time (robust to other load
+    on a shared machine), plus the median by wall-clock time."""
+    cpu, wall = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        c0, w0 = time.process_time(), time.perf_counter()
         fn()
-        rates.append(n / (time.perf_counter() - t0))
-    return statistics.median(rates), min(rates), max(rates)
+        cpu.append(n / (time.process_time() - c0))
+        wall.append(n / (time.perf_counter() - w0))
+    return statistics.median(cpu), min(cpu), max(cpu), statistics.median(wall)
 
 
 def bench_single(env_id, steps, repeats):
@@ -59,9 +67,9 @@ def bench_single(env_id, steps, repeats):
     n = 200
     ts = []
     for i in range(n):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         env.reset(seed=i)
-        ts.append(time.perf_counter() - t0)
+        ts.append(time.process_time() - t0)
     out["reset_env_us"] = statistics.median(ts) * 1e6
     ts = []
     for i in range(n):
@@ -112,13 +120,14 @@ def main(argv=None):
     print(f"# towenv environment benchmark — {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, Python {platform.python_version()}, one process")
     print(f"# 10 Hz control, dt = 0.05 s (2 physics sub-steps), {args.steps} steps per run, median of "
-          f"{args.repeats} runs (min–max in brackets); load average at start {os.getloadavg()[0]:.2f}\n")
+          f"{args.repeats} runs by process CPU time (min–max, and the wall-clock median, in brackets); "
+          f"load average at start {os.getloadavg()[0]:.2f}\n")
     rows = []
     for env_id in towenv.envs.ENV_IDS:
         s = bench_single(env_id, args.steps, args.repeats)
         v = bench_vector(env_id, args.num_envs, max(args.steps // args.num_envs, 100), args.repeats)
         rows.append((env_id, s, v))
-    fmt = lambda r: f"{r[0]:,.0f} ({r[1]:,.0f}–{r[2]:,.0f})"   # noqa: E731
+    fmt = lambda r: f"{r[0]:,.0f} ({r[1]:,.0f}–{r[2]:,.0f}; wall {r[3]:,.0f})"   # noqa: E731
     print("| environment | env steps/s (unwrapped) | env steps/s (gym.make) | simulator only | "
           "reset env (µs) | Simulator.reset (µs) |")
     print("|---|---|---|---|---|---|")
