@@ -8,7 +8,10 @@ environment id at the default 10 Hz control / 0.05 s physics step (2 sub-steps p
 * the simulator alone (``Simulator.advance_steps(2)`` per control step, the same sea), for the overhead;
 * reset time (µs): ``env.reset()`` (new sea: ``Simulator.set_sea`` + ``reset``) and ``Simulator.reset()``;
 * vector env: ``--num-envs`` copies in the ``vector_entry_point`` env, and SB3 ``DummyVecEnv`` (via
-  ``make_vec_env``) for comparison — total env-steps/s.
+  ``make_vec_env``) for comparison — total env-steps/s, ``--vector-steps`` steps of every copy per run.
+
+Runs are long enough to amortise the per-episode costs the way real episodes do: a reset (new sea)
+costs ~0.3 ms, and the simulator evaluates the vessel motion in blocks of 2048 physics steps (~100 s).
 
     python scripts/bench_env.py                  # about a minute
     python scripts/bench_env.py --steps 1000 --repeats 3
@@ -115,6 +118,8 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=2000, help="control steps per run (default 2000 = 200 s)")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--num-envs", type=int, default=8)
+    ap.add_argument("--vector-steps", type=int, default=1000,
+                    help="vector steps per run (each copy steps this many times; default 1000)")
     args = ap.parse_args(argv)
     import towenv.envs
     print(f"# towenv environment benchmark — {platform.processor() or platform.machine()}, "
@@ -125,7 +130,7 @@ def main(argv=None):
     rows = []
     for env_id in towenv.envs.ENV_IDS:
         s = bench_single(env_id, args.steps, args.repeats)
-        v = bench_vector(env_id, args.num_envs, max(args.steps // args.num_envs, 100), args.repeats)
+        v = bench_vector(env_id, args.num_envs, args.vector_steps, args.repeats)
         rows.append((env_id, s, v))
     fmt = lambda r: f"{r[0]:,.0f} ({r[1]:,.0f}–{r[2]:,.0f}; wall {r[3]:,.0f})"   # noqa: E731
     print("| environment | env steps/s (unwrapped) | env steps/s (gym.make) | simulator only | "

@@ -661,6 +661,19 @@ def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0,
 
 
 @njit(cache=True)
+def _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs):
+    """Node positions from the tensions through each node's linear map r_a = A_a + Σ σ T q_a,k."""
+    for a in range(node_kind.shape[0]):
+        if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
+            continue
+        for i in range(3):
+            x = acon[a, i]
+            for k in range(node_nseg[a]):
+                x += node_sgn[a, k] * tens[node_segs[a, k]] * qvec[a, k, i]
+            rs[a, i] = x
+
+
+@njit(cache=True)
 def _compensator_node(a, ship, comp, cmode, act, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, tang, stretched,
                       tens, mnode, bnode, fnode, acon, qvec):
     """Heave-compensator sheave (model.md 2.7, Hover §IV-A): the cable's top node moves with the ship
@@ -899,11 +912,12 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                     tmp33[i, j] = mnode[a, i, j] + att[i, j]
             if not _inv3(tmp33, tmp33b):
                 return FAIL_NAN, it, a, 0.0
+            for j in range(3):
+                hvec[j] = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
             for i in range(3):
                 hi = 0.0
                 for j in range(3):
-                    hj = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
-                    hi += mnode[a, i, j] * hj + att[i, j] * rs[a, j]
+                    hi += mnode[a, i, j] * hvec[j] + att[i, j] * rs[a, j]
                 tmp3[i] = hi + hdt2 * fnode[a, i]
             for i in range(3):
                 acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
@@ -913,14 +927,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                     qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
                                             + tmp33b[i, 2] * tang[s, 2])
         # positions at the current tensions, and residuals
-        for a in range(nn):
-            if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
-                continue
-            for i in range(3):
-                x = acon[a, i]
-                for k in range(node_nseg[a]):
-                    x += node_sgn[a, k] * tens[node_segs[a, k]] * qvec[a, k, i]
-                rs[a, i] = x
+        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
         place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
         tmax = 0.0
         for s in range(ns):
@@ -968,14 +975,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         if not math.isfinite(maxd):
             return FAIL_NAN, it, elem, maxd
         # positions with the updated tensions (same coefficients)
-        for a in range(nn):
-            if node_kind[a] != FREE and node_kind[a] != COMPENSATOR:
-                continue
-            for i in range(3):
-                x = acon[a, i]
-                for k in range(node_nseg[a]):
-                    x += node_sgn[a, k] * tens[node_segs[a, k]] * qvec[a, k, i]
-                rs[a, i] = x
+        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
         # --- body rotations: ω̇ = A_rr⁻¹(M − A_rt a), Houbolt on the Euler angles -------------------
         dang_max = 0.0
         for b in range(nb):
