@@ -56,3 +56,24 @@ def test_solver_method_selects_the_integrator():
     assert qs.top_tension == pytest.approx(ref, rel=1e-6)
     with pytest.raises(towenv.SceneError, match="solver.method"):
         towenv.make_simulator(peer_deck(), method="leapfrog")
+
+
+def test_as_published_tension_recursion_fails_at_the_thesis_time_step_guide():
+    """The thesis's recursion (4.38)–(4.40) as a solver variant. It works where
+    s = 2(l/(c_L Δt))² is modest (10 segments at 0.5 ms: s = 40, same answer as the tree solve) but at the
+    thesis's own guide Δt = l/(10 c_L) (s ≈ 200) it fails from n = 20 segments, where the default tree
+    LDLᵀ is exact (model.md 5.6, erratum E15; measured: non-finite tensions in the first step)."""
+    ok = towenv.Simulator(peer_deck(speed=2.0, segments=10, dt=5e-4, tension_solve="as_published"))
+    ok.advance(0.05)
+    ref = towenv.Simulator(peer_deck(speed=2.0, segments=10, dt=5e-4))
+    ref.advance(0.05)
+    assert ok.top_tension == pytest.approx(ref.top_tension, rel=1e-6)
+    dt = 5.0 / (10 * np.sqrt(2e7))                      # thesis guide for 20 segments of 5 m
+    bad = towenv.Simulator(peer_deck(speed=2.0, segments=20, dt=dt, tension_solve="as_published", max_step_cuts=0))
+    with pytest.raises(towenv.SimulationDivergence):
+        bad.advance(0.01)
+    good = towenv.Simulator(peer_deck(speed=2.0, segments=20, dt=dt, max_step_cuts=0))
+    good.advance(0.01)
+    assert good.top_tension == pytest.approx(ref.top_tension, rel=1e-3)
+    with pytest.raises(ValueError, match="single chain"):
+        towenv.Simulator(towenv.load_scene("two_part_tow_1").with_overrides(**{"solver.tension_solve": "as_published"}))

@@ -967,6 +967,7 @@ class Solver(_Model):
     ``euler`` / ``rk2`` / ``rk4`` — explicit, needs Δt below the axial CFL limit; ``quasi_static`` —
     static equilibrium at every step), time step and Newton-iteration settings."""
     method: _choice("houbolt", "euler", "rk2", "rk4", "quasi_static") = "houbolt"
+    tension_solve: _choice("tree", "as_published") = "tree"
     axial_damping_ratio: Num(ge=0, le=10) = 0.0
     dt: Num(ge=1e-5, le=1, unit="s") = 0.02
     tolerance: Num(gt=0, unit="N") = 0.5

@@ -661,6 +661,62 @@ def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0,
 
 
 @njit(cache=True)
+def thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, x, work):
+    """The thesis's printed shooting recursion (4.38)–(4.40), *as published*, for a single chain — the
+    labelled "as published" variant of the tension solve (``solver.tension_solve = "as_published"``).
+
+    With segments numbered from the bottom, ``E δT_{i−1} − F δT_i + G δT_{i+1} = −ER_i`` is solved by
+    ``δT_i = μ_i δT_0 + η_i`` and closed at the top. The homogeneous recurrence grows like λⁿ
+    (λ + 1/λ = 2 + s, s = 2(l/(c_L Δt))²), so for stiff cables at large steps round-off swamps the
+    answer (model.md 5.6, erratum E15). Kept to show that failure; the default is ``tree_ldlt_solve``.
+    Returns False if a G coefficient is zero or the result is not finite."""
+    n = order.shape[0]
+    # E_i, F_i, G_i in bottom-up order (J = −K: E = −K[i, i−1], F = K[i, i], G = −K[i, i+1])
+    mu = np.zeros(n)
+    eta = np.zeros(n)
+    E = np.zeros(n)
+    F = np.zeros(n)
+    G = np.zeros(n)
+    R = np.zeros(n)
+    for i in range(n):
+        p = order[i]
+        F[i] = kd[p]
+        R[i] = -rhs[p]
+        if i + 1 < n:
+            u = order[i + 1]
+            a = seg_up[p]
+            ku = -1
+            for k in range(node_nseg[a]):
+                if node_segs[a, k] == u:
+                    ku = k
+            if ku < 0:
+                return False       # not a chain
+            G[i] = -kb[a, seg_uplocal[p], ku]
+            E[i + 1] = -kb[a, ku, seg_uplocal[p]]
+    mu[0] = 1.0
+    for i in range(n - 1):
+        if G[i] == 0.0:
+            return False
+        mu_m = mu[i - 1] if i > 0 else 0.0
+        eta_m = eta[i - 1] if i > 0 else 0.0
+        mu[i + 1] = (F[i] * mu[i] - E[i] * mu_m) / G[i]
+        eta[i + 1] = (R[i] + F[i] * eta[i] - E[i] * eta_m) / G[i]
+    i = n - 1
+    mu_m = mu[i - 1] if n > 1 else 0.0
+    eta_m = eta[i - 1] if n > 1 else 0.0
+    den = E[i] * mu_m - F[i] * mu[i]
+    if den == 0.0:
+        return False
+    d0 = (R[i] - E[i] * eta_m + F[i] * eta[i]) / den
+    for i in range(n):
+        v = mu[i] * d0 + eta[i]
+        if not math.isfinite(v):
+            return False
+        x[order[i]] = v
+    return True
+
+
+@njit(cache=True)
 def _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs):
     """Node positions from the tensions through each node's linear map r_a = A_a + Σ σ T q_a,k."""
     for a in range(node_kind.shape[0]):
@@ -958,8 +1014,12 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                             for k2 in range(node_nseg[a]):
                                 kb[a, k, k2] = 0.0
                                 kb[a, k2, k] = 0.0
-        if not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb,
-                               rhs, dT):
+        if settings[6] == 1.0:
+            if not thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, dT,
+                                          gres):
+                return FAIL_NEWTON, it, -1, 0.0
+        elif not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb,
+                                 rhs, dT):
             return FAIL_NEWTON, it, -1, 0.0
         maxd = 0.0
         elem = -1

@@ -56,10 +56,12 @@ class SolverSettings:
     max_strain: float = 0.2
     settle_time: float = 0.0
     angle_tolerance: float = 1e-5
+    tension_solve: str = "tree"
 
     def array(self):
         return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
-                         self.angle_tolerance, self.max_step_cuts], float)
+                         self.angle_tolerance, self.max_step_cuts,
+                         1.0 if self.tension_solve == "as_published" else 0.0], float)
 
 
 def load(scene, overrides=None):
@@ -96,6 +98,10 @@ class Simulator:
         self.vessel_motion = self._vessel_motion(Path(base) if base else None, data_dir)
         if self.vessel_motion is not None:
             self.path.oscillations.append(self.vessel_motion)
+        if self.settings.tension_solve == "as_published" and (
+                np.any(self.system.node_nseg > 2) or self.system.n_rigid + len(self.system.bodies) > 1):
+            raise ValueError("solver.tension_solve: 'as_published' (the thesis recursion) handles a single chain "
+                             "only (no junctions or series bodies)")
         self.comp = np.zeros(16)
         self.winch = np.zeros(12)
         self.wstate = np.zeros(4)

@@ -130,6 +130,9 @@ class TowEnv(gym.Env):
         if scene_overrides:
             base = base.with_overrides(dict(scene_overrides))
         self.base_scene = self._prepare_scene(base)
+        if cable_lengths is not None and cable_line not in [ln.name for ln in self.base_scene.lines]:
+            raise ValueError(f"cable_line {cable_line!r} is not a line of scene {self.base_scene.name!r} "
+                             f"(lines: {[ln.name for ln in self.base_scene.lines]})")
         self._sims: dict[tuple, Any] = {}
         self._config = (None, None)
         self.sim = self._get_sim(None, None)           # the default configuration, built eagerly
@@ -174,6 +177,10 @@ class TowEnv(gym.Env):
                 if isinstance(other.top, JunctionAttachment) and other.top.line == ln.name:
                     ov[f"lines.{other.name}.top.distance"] = other.top.distance + d_len
         return sc.with_overrides(ov) if ov else sc
+
+    @staticmethod
+    def _line_names(sim):
+        return [ln.name for ln in sim.scene.lines]
 
     def _apply_action(self, a: np.ndarray) -> None:
         raise NotImplementedError
@@ -235,8 +242,9 @@ class TowEnv(gym.Env):
         m = self._measure(self._prev_action)
         obs = self.observer.reset(m, rng)
         info = {"sea_state": {"hs": float(sea.hs), "tp": float(sea.tp), "heading_deg": float(sea.heading_deg)},
-                "sea_seed": int(wseed), "vessel_speed": float(sim.path.initial_speed),
-                "cable_length": float(sim.scene.line(self.cable_line).length), "t": 0.0}
+                "sea_seed": int(wseed), "vessel_speed": float(sim.path.initial_speed), "t": 0.0}
+        if self.cable_line in self._line_names(sim):
+            info["cable_length"] = float(sim.scene.line(self.cable_line).length)
         if self.render_mode == "human":
             self.render()
         return obs, info
@@ -245,7 +253,7 @@ class TowEnv(gym.Env):
         a = np.array(action, dtype=float).reshape(self.ACTION_DIM)      # a copy: the caller's array is kept
         if not np.isfinite(a).all():
             a = np.nan_to_num(a, nan=0.0)
-        np.clip(a, -1.0, 1.0, out=a)
+        np.minimum(np.maximum(a, -1.0, out=a), 1.0, out=a)
         sim = self.sim
         self._apply_action(a)
         failure = None

@@ -170,7 +170,7 @@ class Observer:
             raw += self._std * rng.standard_normal(self.size)
         if not np.isfinite(raw).all():           # finite by construction: NaN -> 0, ±inf -> the bounds
             np.nan_to_num(raw, copy=False, nan=0.0, posinf=1e30, neginf=-1e30)
-        np.clip(raw, self._lo64, self._hi64, out=raw)
+        np.minimum(np.maximum(raw, self._lo64, out=raw), self._hi64, out=raw)
         return raw.astype(np.float32)
 
     def reset(self, m, rng) -> np.ndarray:
@@ -323,7 +323,7 @@ class HeavePitchReward(RewardFn):
         da = np.subtract(action, prev_action)
         da2 = float(da @ da) / max(da.size, 1)
         eff = m.get("effort", 0.0)
-        eff2 = float(eff) ** 2 if np.ndim(eff) == 0 else float(np.mean(np.square(eff)))
+        eff2 = float(eff) ** 2 if isinstance(eff, (int, float)) else float(np.mean(np.square(eff)))
         c = {
             "heave": w["heave"] * m["fish_heave"] ** 2,
             "pitch": w["pitch"] * m["fish_pitch"] ** 2,
