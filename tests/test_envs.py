@@ -61,7 +61,7 @@ def test_registration_idempotent_and_all_ids_constructible():
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_gymnasium_checker(env_id):
-    env = gym.make(env_id).unwrapped
+    env = gym.make(env_id, render_mode="rgb_array").unwrapped      # also runs the render checks
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
         check_env(env)

@@ -18,3 +18,8 @@ try:
     from .scene import Scene, SceneError, list_scenes, load_scene  # noqa: F401
 except ImportError:  # pragma: no cover  (scene module being written)
     pass
+
+import importlib.util as _ilu  # noqa: E402
+
+if _ilu.find_spec("gymnasium") is not None:  # optional .[rl] extra: registers the towenv/* environments
+    from . import envs  # noqa: F401,E402

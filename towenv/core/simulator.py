@@ -335,6 +335,7 @@ class Simulator:
         """Back to the settled initial state at t = 0."""
         self.restore(self._initial)
         self.counters[:] = 0
+        self.remesh_count = 0
 
     def _run(self, tops, dt, t_start):
         done = 0
@@ -557,6 +558,14 @@ class Simulator:
         K.node_reaction(node, r, r, r, r, self.settings.dt, s.node_nseg, s.node_segs, s.node_sgn, tang,
                         self.tensions, mnode, fnode, out)
         return out
+
+    def tow_point_state(self):
+        """Vessel tow point (ship side of any compensator): position, velocity and acceleration from the
+        stored history (what a tow-point IMU measures), global axes."""
+        h = self.hist_r[:, self.system.top_node]
+        dt = self.settings.dt
+        return {"position": h[0].copy(), "velocity": (3 * h[0] - 4 * h[1] + h[2]) / (2 * dt),
+                "acceleration": (h[0] - 2 * h[1] + h[2]) / (dt * dt)}
 
     def node_tensions(self, name) -> np.ndarray:
         """Cable tension at each node of a line (top first), free of the half-segment bias of segment

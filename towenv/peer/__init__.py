@@ -9,4 +9,5 @@ install hint when it is missing.
 from __future__ import annotations
 
 from .moordyn_runner import (MoorDynResult, MoorDynUnsupported, moordyn_available, moordyn_input,  # noqa: F401
-                             require_moordyn, run_moordyn)
+                             require_moordyn, run_moordyn, settled_state,
+                             towenv_axial_damping_ratio)

@@ -242,15 +242,66 @@ def _quiet(capture_path):
         os.close(fd)
 
 
+def _setup(sc, d, dtM, scheme, zeta, dt_coupling, settle_time, segments):
+    path = _path_of(sc)
+    U = np.asarray(path.initial_velocity(), float)
+    speed = float(np.linalg.norm(U))
+    if settle_time is None:
+        settle_time = 0.0 if speed == 0 else max(300.0, 10.0 * d.length / speed)
+    n_settle = int(round(settle_time / dt_coupling))
+    x0 = path.position(np.array([0.0]))[0]
+    start = x0 - n_settle * dt_coupling * U
+    text = moordyn_input(sc, dtM=dtM, scheme=scheme, zeta=zeta, start=start, segments=segments)
+    return path, U, speed, n_settle, x0, start, text
+
+
+def settled_state(scene, settle_time: float | None = None, dtM: float | None = None, scheme: str = "RK4",
+                  zeta: float = 0.5, dt_coupling: float = 0.05, segments: int | None = None,
+                  quiet: bool = True) -> tuple[bytes, dict]:
+    """MoorDyn state (``moordyn.Serialize`` bytes) after ``settle_time`` s of steady towing at the path's
+    initial velocity, ending with the tow point at x(0): pass it as ``run_moordyn(initial_state=...)`` to
+    start several runs (other dtM/schemes) from the same steady tow. ``dtM`` defaults to 0.5 l/c_L with
+    RK4 (stable with ζ ≤ 0.5). Returns (state, info) with info = settle time, wall time, final tension."""
+    md = require_moordyn()
+    from ..scene import load_scene
+    sc = load_scene(scene)
+    d = _deck(sc)
+    n = int(segments or d.segments)
+    if dtM is None:
+        dtM = 0.5 * (d.length / n) / math.sqrt(d.EA / d.mu)
+    path, U, speed, n_settle, x0, start, text = _setup(sc, d, dtM, scheme, zeta, dt_coupling, settle_time, n)
+    with tempfile.TemporaryDirectory(prefix="towenv_moordyn_") as tmp:
+        inp = Path(tmp) / "towenv_peer.txt"
+        inp.write_text(text)
+        logp = Path(tmp) / "console.txt"
+        with (_quiet(str(logp)) if quiet else contextlib.nullcontext()):
+            s = md.Create(str(inp))
+            try:
+                md.Init(s, list(start), list(U))
+                w0 = time.perf_counter()
+                f = [float("nan")] * 3
+                ul = list(U)
+                for k in range(n_settle):
+                    f = md.Step(s, list(start + k * dt_coupling * U), ul, k * dt_coupling, dt_coupling)
+                wall = time.perf_counter() - w0
+                state = md.Serialize(s)
+            finally:
+                md.Close(s)
+    return state, dict(settle_time=n_settle * dt_coupling, wall=wall, top_tension=float(np.linalg.norm(f)),
+                       dtM=dtM, scheme=scheme, zeta=zeta, segments=n)
+
+
 def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", zeta: float = 1.0,
                 dt_coupling: float = 0.01, settle_time: float | None = None, segments: int | None = None,
-                quiet: bool = True) -> MoorDynResult:
+                initial_state: bytes | None = None, quiet: bool = True) -> MoorDynResult:
     """Run ``scene`` in MoorDyn for ``duration`` s with the towenv tow-point path.
 
     ``dtM``/``scheme``: MoorDyn's internal step and scheme (RK2, RK4, Euler, ...); ``zeta``: segment
-    damping ratio (MoorDyn convention, BA = −zeta); ``dt_coupling``: the Step interval; ``settle_time``:
-    s of steady towing at the path's initial velocity before t = 0 (default 0 for a scene at rest, else
-    ``max(60, 40 L/U)``-ish, see below); ``segments`` overrides the scene's count.
+    damping ratio (MoorDyn convention, BA = −zeta); ``dt_coupling``: the Step interval; ``segments``
+    overrides the scene's count. The start at t = 0 is either ``initial_state`` (from
+    :func:`settled_state`, same segment count) or MoorDyn's static initial condition followed by
+    ``settle_time`` s of steady towing at the path's initial velocity (default: 0 for a scene at rest,
+    else max(300 s, 10 L/U); the slow drift of a towed body from the hang decays over minutes).
 
     Returns a :class:`MoorDynResult`. If MoorDyn fails (error code, exception or non-finite force) the
     series end at the last good step and ``failed`` says why — nothing is silently dropped.
@@ -261,16 +312,11 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
     from ..scene import load_scene
     sc = load_scene(scene)
     d = _deck(sc)
-    path = _path_of(sc)
-    U = np.asarray(path.initial_velocity(), float)
-    speed = float(np.linalg.norm(U))
-    if settle_time is None:
-        settle_time = 0.0 if speed == 0 else max(60.0, 3.0 * d.length / speed)
-    n_settle = int(round(settle_time / dt_coupling))
+    if initial_state is not None:
+        settle_time = 0.0
+    path, U, speed, n_settle, x0, start, text = _setup(sc, d, dtM, scheme, zeta, dt_coupling, settle_time,
+                                                       segments)
     n_steps = int(round(duration / dt_coupling))
-    x0 = path.position(np.array([0.0]))[0]
-    start = x0 - n_settle * dt_coupling * U
-    text = moordyn_input(sc, dtM=dtM, scheme=scheme, zeta=zeta, start=start, segments=segments)
     tk = np.arange(n_steps + 1) * dt_coupling
     xs = path.position(tk)
     vs = np.diff(xs, axis=0) / dt_coupling
@@ -284,19 +330,22 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
         inp = Path(tmp) / "towenv_peer.txt"
         inp.write_text(text)
         logp = Path(tmp) / "console.txt"
-        ctx = _quiet(str(logp)) if quiet else contextlib.nullcontext()
         sys_ = None
         n_done = -1
         try:
-            with ctx:
+            with (_quiet(str(logp)) if quiet else contextlib.nullcontext()):
                 w0 = time.perf_counter()
                 sys_ = md.Create(str(inp))
                 if sys_ is None:
                     raise RuntimeError("moordyn.Create returned None")
-                rc = md.Init(sys_, list(start), list(U))
+                if initial_state is not None:
+                    md.Init_NoIC(sys_, list(start), list(U))
+                    md.Deserialize(sys_, initial_state)
+                else:
+                    rc = md.Init(sys_, list(start), list(U))
+                    if rc not in (0, None):
+                        raise RuntimeError(f"moordyn.Init returned error code {rc}")
                 res.wall_init = time.perf_counter() - w0
-                if rc not in (0, None):
-                    raise RuntimeError(f"moordyn.Init returned error code {rc}")
                 res.meta["dtM_effective"] = float(cmoordyn.get_dt(sys_))
                 point = md.GetPoint(sys_, 2)
                 # settling: steady towing at the initial velocity up to t = 0 (position x(t_k) at step start)
@@ -305,11 +354,8 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                 f = None
                 ulist = list(U)
                 for k in range(n_settle):
-                    xk = start + k * dt_coupling * U
-                    f = md.Step(sys_, list(xk), ulist, t_md, dt_coupling)
+                    f = md.Step(sys_, list(start + k * dt_coupling * U), ulist, t_md, dt_coupling)
                     t_md += dt_coupling
-                    if f is None or not all(math.isfinite(c) for c in f):
-                        raise RuntimeError(f"MoorDyn failed while settling at t = {t_md - settle_time:.3f} s")
                 res.wall_settle = time.perf_counter() - w0
                 t_rec[0] = 0.0
                 if f is not None:
@@ -326,16 +372,18 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                     wall += pc() - a
                     t_md += dt_coupling
                     if f is None or not (math.isfinite(f[0]) and math.isfinite(f[1]) and math.isfinite(f[2])):
-                        res.failed = f"MoorDyn {scheme} at dtM = {dtM:g} s: non-finite force at t = {tk[k + 1]:.3f} s"
+                        res.failed = (f"MoorDyn {scheme} at dtM = {dtM:g} s: non-finite force at "
+                                      f"t = {tk[k + 1]:.3f} s")
                         break
                     t_rec[k + 1] = tk[k + 1]
                     f_rec[k + 1] = f
                     b_rec[k + 1] = md.GetPointPos(point)
                     n_done = k + 1
                 res.wall_step = wall
-        except Exception as exc:  # MoorDyn raises on "error integrating" etc.
-            t_fail = tk[n_done + 1] if 0 <= n_done < n_steps else float("nan")
-            res.failed = f"MoorDyn {scheme} at dtM = {dtM:g} s failed at t = {t_fail:.3f} s: {exc}"
+        except Exception as exc:  # MoorDyn raises RuntimeError("... error integrating") on a blow-up
+            where = (f"t = {tk[n_done + 1]:.3f} s" if 0 <= n_done < n_steps else
+                     "while settling" if n_done < 0 else "at the end")
+            res.failed = f"MoorDyn {scheme} at dtM = {dtM:g} s failed {where}: {exc}"
         finally:
             if sys_ is not None:
                 with (_quiet(str(logp)) if quiet else contextlib.nullcontext()):
@@ -345,16 +393,14 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                         pass
             if logp.exists():
                 res.log = logp.read_text(errors="replace")
-    if res.failed and n_done >= 0:
-        if "error" in res.log.lower() and "failed" in res.failed:
-            tail = [ln for ln in res.log.splitlines() if "rror" in ln]
-            if tail:
-                res.failed += f" ({tail[-1].strip()[:160]})"
+    if res.failed:
+        errs = [ln.strip() for ln in res.log.splitlines() if ln.startswith("ERR")]
+        if errs:
+            res.failed += f" [{errs[-1][-120:]}]"
     m = ~np.isnan(t_rec)
     res.t, res.top_force, res.body_position = t_rec[m], f_rec[m], b_rec[m]
-    if n_settle == 0 and len(res.t) and np.isnan(res.top_force[0]).any():
-        # no settling step taken: report the first step's force for t = 0 too (static start)
-        res.top_force[0] = res.top_force[1] if len(res.t) > 1 else np.nan
+    if len(res.t) > 1 and np.isnan(res.top_force[0]).any():
+        res.top_force[0] = res.top_force[1]     # no settling step taken (static start): first step's force
     res.meta.update(settle_time=n_settle * dt_coupling, input_speed=speed)
     return res
 
