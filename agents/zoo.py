@@ -121,7 +121,10 @@ def load_hyperparams(path: str | Path, env_id: str) -> dict:
 
     Returns ``{"algo_kwargs": {...}, "n_envs", "n_timesteps", "policy", "normalize", "env_wrapper",
     "env_kwargs", "raw": <the block as written>}``."""
-    import yaml
+    try:
+        import yaml
+    except ImportError:
+        raise ImportError("reading agents/hyperparams/*.yml needs PyYAML: pip install pyyaml") from None
     with open(path) as f:
         doc = yaml.safe_load(f) or {}
     if env_id not in doc:

@@ -136,6 +136,12 @@ def main(argv=None):
         venv = VecNormalize(venv, gamma=hp["algo_kwargs"].get("gamma", 0.99), **norm)
 
     algo_cls = ALGOS[args.algo]
+    try:
+        import tensorboard  # noqa: F401
+        tb_dir = str(run / "tb")
+    except ImportError:
+        tb_dir = None
+        print("[train] tensorboard is not installed: no TensorBoard logs (pip install tensorboard)", flush=True)
     start_steps = 0
     latest = _latest_checkpoint(ckpt_dir) if args.resume else None
     if args.resume and latest is None:
@@ -146,14 +152,14 @@ def main(argv=None):
         vn = ckpt_dir / f"ckpt_{steps}_vecnormalize.pkl"
         if norm is not None and vn.exists():
             venv = VecNormalize.load(str(vn), venv.venv)
-        model = algo_cls.load(zpath, env=venv, device=args.device, tensorboard_log=str(run / "tb"))
+        model = algo_cls.load(zpath, env=venv, device=args.device, tensorboard_log=tb_dir)
         rb = ckpt_dir / f"ckpt_{steps}_replay_buffer.pkl"
         if hasattr(model, "load_replay_buffer") and rb.exists():
             model.load_replay_buffer(rb)
         start_steps = model.num_timesteps
     else:
         model = algo_cls(hp["policy"], venv, seed=args.seed, device=args.device, verbose=args.verbose,
-                         tensorboard_log=str(run / "tb"), **hp["algo_kwargs"])
+                         tensorboard_log=tb_dir, **hp["algo_kwargs"])
 
     callbacks: list[BaseCallback] = []
     if args.save_freq > 0:

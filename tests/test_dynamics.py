@@ -152,3 +152,22 @@ def test_divergence_is_reported_with_time_element_and_cause():
     err = info.value
     assert err.time > 0 and err.cause and err.element
     assert np.all(np.isfinite(sim.positions)) and np.all(np.isfinite(sim.tensions))
+
+
+def test_reverse_flow_is_folded_not_clipped():
+    """A body that merely reverses (u_r from +1 mm/s to −1 mm/s while sinking at 1 m/s) keeps the same
+    drag: the table is folded fore–aft instead of being read at its ±90° cross-flow end (issue found by
+    the Hover deep-tow validation)."""
+    import towenv.core.kernels as K
+    sim = towenv.Simulator("two_part_tow_1")
+    s = sim.system
+    lam = np.eye(3)
+    out = []
+    for u in (1e-3, -1e-3):
+        f = np.zeros(3)
+        m = np.zeros(3)
+        bd = np.zeros(1)
+        K.body_loads(1, lam, np.array([u, 0.0, -1.0]), np.zeros(3), s.bp, s.btab_n, s.btab, s.rho, s.g,
+                     np.zeros(3), f, m, bd)
+        out.append(f.copy())
+    assert np.linalg.norm(out[1]) == pytest.approx(np.linalg.norm(out[0]), rel=1e-2)

@@ -209,7 +209,7 @@ BAD_CASES = {
     "vector of 2": (lambda d: d["bodies"][1].update(cg=[0.0, 0.0]), "bodies[1].cg"),
     "incidence not increasing": (lambda d: d["bodies"][1]["coefficients"].update(incidence_deg=[0.0, 20.0, 10.0]),
                                  "bodies[1].coefficients.incidence_deg[2]"),
-    "incidence beyond 90": (lambda d: d["bodies"][1]["coefficients"].update(incidence_deg=[0.0, 10.0, 95.0]),
+    "incidence beyond 180": (lambda d: d["bodies"][1]["coefficients"].update(incidence_deg=[0.0, 10.0, 185.0]),
                             "bodies[1].coefficients.incidence_deg[2]"),
     "negative drag": (lambda d: d["bodies"][1]["coefficients"].update(drag=[0.3, -0.4, 0.7]),
                       "bodies[1].coefficients.drag[1]"),

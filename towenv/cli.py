@@ -95,7 +95,19 @@ def build_parser() -> argparse.ArgumentParser:
     pm.add_argument("--quiet", "-q", action="store_true",
                     help="no progress bar or summary table; print only the output folder")
     pm.set_defaults(func=cmd_simulate)
+
+    pv = sub.add_parser("validate", help="run the validation cases and write docs/validation.md",
+                        description="Run the validation report (same options as scripts/validate.py).",
+                        add_help=False)
+    pv.add_argument("rest", nargs=argparse.REMAINDER)
+    pv.set_defaults(func=cmd_validate)
     return p
+
+
+def cmd_validate(args) -> int:
+    """``towenv validate [--quick] [--cases ...] [--report-only]``: the validation report."""
+    from .validation.report import main as validate_main
+    return int(validate_main(list(args.rest)) or 0)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -213,6 +225,10 @@ def cmd_simulate(args) -> int:
 # ---------------------------------------------------------------------------------------------------
 def main(argv=None) -> int:
     """Entry point of the ``towenv`` command; returns the exit code (0 ok, 2 on errors)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["validate"]:                 # options pass straight through to the validation report
+        from .validation.report import main as validate_main
+        return int(validate_main(argv[1:]) or 0)
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

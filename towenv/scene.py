@@ -832,7 +832,7 @@ class Line(_Model):
 class CoefficientTable(_Model):
     """Force/moment coefficients vs incidence. A table starting at 0 deg is mirrored (drag even, lift and
     moment odd); outside the table the end value is held."""
-    incidence_deg: tuple[Num(ge=-90, le=90, unit="deg"), ...]
+    incidence_deg: tuple[Num(ge=-180, le=180, unit="deg"), ...]
     drag: tuple[Num(ge=0), ...]
     lift: tuple[Num(), ...]
     moment: tuple[Num(), ...]

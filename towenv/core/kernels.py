@@ -273,6 +273,24 @@ def node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu,
 # rigid towed bodies (fish, depressor)
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
+def _table_coefficients(theta, inc, cd, cl, cm, n):
+    """Drag, lift (or side force) and weathervane-moment coefficients at incidence ``theta`` (deg).
+
+    Reverse flow (|θ| > 90°, the body moving tail first) beyond a table that stops at ±90° is folded
+    fore–aft: at θ' = sign(θ)(180° − |θ|) the drag and the moment keep their values and the lift changes
+    sign (a fore–aft symmetric body: the normal force still pushes the body the way the cross-flow goes,
+    and the centre of pressure stays aft of the tow point). Without the fold the table's ±90° cross-flow
+    values would be used for a body that merely reverses (reported by the validation of Hover's deep tow).
+    Tables that cover |θ| > 90° themselves are used as given."""
+    if abs(theta) > 90.0 and (theta > inc[n - 1] or theta < inc[0]) and inc[n - 1] <= 90.0 and inc[0] >= -90.0:
+        tf = 180.0 - abs(theta)
+        if theta < 0.0:
+            tf = -tf
+        return (table_lookup(tf, inc, cd, n), -table_lookup(tf, inc, cl, n), table_lookup(tf, inc, cm, n))
+    return table_lookup(theta, inc, cd, n), table_lookup(theta, inc, cl, n), table_lookup(theta, inc, cm, n)
+
+
+@njit(cache=True)
 def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out, m_out, bdiag_out):
     """Hydrodynamic, weight/buoyancy and rotational damping loads on rigid body ``b``.
 
@@ -319,12 +337,8 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
     if vmag > 1e-9:
         th_v = math.degrees(math.atan2(wr, ur))    # vertical incidence (docs/scene-format.md)
         th_h = math.degrees(math.atan2(vr, ur))    # horizontal incidence (sideslip)
-        cd_v = table_lookup(th_v, btab[b, 0], btab[b, 1], nv)
-        cl_v = table_lookup(th_v, btab[b, 0], btab[b, 2], nv)
-        cm_v = table_lookup(th_v, btab[b, 0], btab[b, 3], nv)
-        cd_h = table_lookup(th_h, btab[b, 4], btab[b, 5], nh)
-        cy_h = table_lookup(th_h, btab[b, 4], btab[b, 6], nh)
-        cm_h = table_lookup(th_h, btab[b, 4], btab[b, 7], nh)
+        cd_v, cl_v, cm_v = _table_coefficients(th_v, btab[b, 0], btab[b, 1], btab[b, 2], btab[b, 3], nv)
+        cd_h, cy_h, cm_h = _table_coefficients(th_h, btab[b, 4], btab[b, 5], btab[b, 6], btab[b, 7], nh)
         cd0 = table_lookup(0.0, btab[b, 0], btab[b, 1], nv)
         cd = cd_v + cd_h - cd0
         if cd < 0.0:

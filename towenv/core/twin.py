@@ -243,6 +243,14 @@ def body_params(sys, b):
                 added_mass=p[20:23].copy(), added_inertia=p[23:26].copy(), r_aft=p[26:29].copy())
 
 
+def _coefficients_np(theta, inc, cd, cl, cm):
+    """Table coefficients with the fore-aft fold for reverse flow beyond a ±90° table (see kernels)."""
+    if abs(theta) > 90.0 and inc[-1] <= 90.0 and inc[0] >= -90.0 and not inc[0] <= theta <= inc[-1]:
+        tf = np.copysign(180.0 - abs(theta), theta)
+        return _lookup(tf, inc, cd), -_lookup(tf, inc, cl), _lookup(tf, inc, cm)
+    return _lookup(theta, inc, cd), _lookup(theta, inc, cl), _lookup(theta, inc, cm)
+
+
 def body_loads_np(sys, b, lam, vbody, omega, cur_global):
     """Body-axis force (at the tow point) and moment (about the tow point) on rigid body ``b`` (model.md 3.3).
 
@@ -277,8 +285,8 @@ def body_loads_np(sys, b, lam, vbody, omega, cur_global):
         nv, nh = sys.btab_n[b]
         tab = sys.btab[b]
         inc_v, inc_h = tab[0, :nv], tab[4, :nh]
-        cd_v, cl_v, cm_v = (_lookup(th_v, inc_v, tab[k, :nv]) for k in (1, 2, 3))
-        cd_h, cy_h, cm_h = (_lookup(th_h, inc_h, tab[k, :nh]) for k in (5, 6, 7))
+        cd_v, cl_v, cm_v = _coefficients_np(th_v, inc_v, tab[1, :nv], tab[2, :nv], tab[3, :nv])
+        cd_h, cy_h, cm_h = _coefficients_np(th_h, inc_h, tab[5, :nh], tab[6, :nh], tab[7, :nh])
         cd = max(cd_v + cd_h - _lookup(0.0, inc_v, tab[1, :nv]), 0.0)
         q = qa * V * V
         tv, th = math.radians(th_v), math.radians(th_h)

@@ -184,7 +184,8 @@ def moordyn_input(scene, dtM: float = 2e-4, scheme: str = "RK2", zeta: float = 1
 # ---------------------------------------------------------------------------------------------------
 @dataclass
 class MoorDynResult:
-    """MoorDyn time series at the coupling steps (t[0] = 0 is the state after Init/settling)."""
+    """MoorDyn time series at the coupling steps: t[0] = 0 is the state after Init/settling, or t[0] = the
+    first coupling step when the run started from a serialized ``initial_state``."""
     t: np.ndarray
     top_force: np.ndarray          # (n, 3) force of the cable on the coupled tow point (from Step), N
     body_position: np.ndarray      # (n, 3) free point, m
@@ -260,15 +261,19 @@ def settled_state(scene, settle_time: float | None = None, dtM: float | None = N
                   quiet: bool = True) -> tuple[bytes, dict]:
     """MoorDyn state (``moordyn.Serialize`` bytes) after ``settle_time`` s of steady towing at the path's
     initial velocity, ending with the tow point at x(0): pass it as ``run_moordyn(initial_state=...)`` to
-    start several runs (other dtM/schemes) from the same steady tow. ``dtM`` defaults to 0.5 l/c_L with
-    RK4 (stable with ζ ≤ 0.5). Returns (state, info) with info = settle time, wall time, final tension."""
+    start several runs (other dtM) from the same steady tow. ``dtM`` defaults to 0.7 l/c_L with RK4
+    (stable with ζ ≤ 0.5). Returns (state, info) with info = settle time, wall time, final tension.
+
+    A state serialized with RK4 loads into RK2 and RK4 instances (moordyn 2.7.2); one serialized with RK2
+    does **not** load into RK4 ("A state variable with … instances cannot be deserialized"), and loading
+    into an Euler instance aborts the process — so settle with RK4 and run RK2/RK4 only."""
     md = require_moordyn()
     from ..scene import load_scene
     sc = load_scene(scene)
     d = _deck(sc)
     n = int(segments or d.segments)
     if dtM is None:
-        dtM = 0.5 * (d.length / n) / math.sqrt(d.EA / d.mu)
+        dtM = 0.7 * (d.length / n) / math.sqrt(d.EA / d.mu)
     path, U, speed, n_settle, x0, start, text = _setup(sc, d, dtM, scheme, zeta, dt_coupling, settle_time, n)
     with tempfile.TemporaryDirectory(prefix="towenv_moordyn_") as tmp:
         inp = Path(tmp) / "towenv_peer.txt"
@@ -313,6 +318,9 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
     sc = load_scene(scene)
     d = _deck(sc)
     if initial_state is not None:
+        if scheme not in ("RK2", "RK4"):
+            # moordyn 2.7.2 aborts the whole process when a serialized RK state is loaded into e.g. Euler
+            raise ValueError(f"initial_state: only RK2/RK4 runs can start from a serialized state (got {scheme!r})")
         settle_time = 0.0
     path, U, speed, n_settle, x0, start, text = _setup(sc, d, dtM, scheme, zeta, dt_coupling, settle_time,
                                                        segments)
@@ -332,6 +340,7 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
         logp = Path(tmp) / "console.txt"
         sys_ = None
         n_done = -1
+        phase = "in Create/Init"
         try:
             with (_quiet(str(logp)) if quiet else contextlib.nullcontext()):
                 w0 = time.perf_counter()
@@ -340,6 +349,7 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                     raise RuntimeError("moordyn.Create returned None")
                 if initial_state is not None:
                     md.Init_NoIC(sys_, list(start), list(U))
+                    phase = "loading the initial state"
                     md.Deserialize(sys_, initial_state)
                 else:
                     rc = md.Init(sys_, list(start), list(U))
@@ -349,6 +359,7 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                 res.meta["dtM_effective"] = float(cmoordyn.get_dt(sys_))
                 point = md.GetPoint(sys_, 2)
                 # settling: steady towing at the initial velocity up to t = 0 (position x(t_k) at step start)
+                phase = "while settling"
                 w0 = time.perf_counter()
                 t_md = 0.0
                 f = None
@@ -357,10 +368,12 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                     f = md.Step(sys_, list(start + k * dt_coupling * U), ulist, t_md, dt_coupling)
                     t_md += dt_coupling
                 res.wall_settle = time.perf_counter() - w0
-                t_rec[0] = 0.0
-                if f is not None:
-                    f_rec[0] = f
-                b_rec[0] = md.GetPointPos(point)
+                if initial_state is None:
+                    # (after Deserialize the point getters are stale until the first Step: no t = 0 sample then)
+                    t_rec[0] = 0.0
+                    if f is not None:
+                        f_rec[0] = f
+                    b_rec[0] = md.GetPointPos(point)
                 n_done = 0
                 wall = 0.0
                 pc = time.perf_counter
@@ -381,8 +394,7 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
                     n_done = k + 1
                 res.wall_step = wall
         except Exception as exc:  # MoorDyn raises RuntimeError("... error integrating") on a blow-up
-            where = (f"t = {tk[n_done + 1]:.3f} s" if 0 <= n_done < n_steps else
-                     "while settling" if n_done < 0 else "at the end")
+            where = f"at t = {tk[n_done + 1]:.3f} s" if 0 <= n_done < n_steps else phase
             res.failed = f"MoorDyn {scheme} at dtM = {dtM:g} s failed {where}: {exc}"
         finally:
             if sys_ is not None:

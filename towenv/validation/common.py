@@ -175,6 +175,10 @@ def savefig(fig, outdir: Path, name: str) -> str:
     import matplotlib.pyplot as plt
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
+    try:
+        fig.tight_layout()
+    except Exception:  # pragma: no cover - layout is cosmetic
+        pass
     fig.savefig(outdir / name, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return f"{outdir.name}/{name}"

@@ -269,7 +269,8 @@ def _fig_prof(res, man, i, outdir) -> Figure:
     t_end_man = T0 + RAMP * len(legs)
     for j, cur in enumerate(CURRENTS):
         r = res[(man, cur)]
-        times = [0.0, T0 + RAMP / 2, t_end_man, t_end_man + 100.0, r.t[-1]]
+        times = sorted({0.0, T0 + RAMP / 2, T0 + RAMP, t_end_man, t_end_man + 100.0, float(r.t[-1])})
+        times = [x for x in times if x <= r.t[-1]]
         for n, tt in enumerate(times):
             k = int(np.argmin(np.abs(r.t - tt)))
             trail, depth, s_mid, tens = _profile(r, k)

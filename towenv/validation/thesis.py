@@ -138,7 +138,7 @@ def run(ctx: CaseContext) -> dict:
             turn_rows.append([name, body] + _turn_metrics(out.result, body, m, sc.vessel.speed))
     values["turn"] = {f"{r[0]}:{r[1]}": {"r_min": r[3], "ship_r": r[2], "advance_deficit": r[4],
                                          "depth0": r[5], "depth_increase": r[7], "pitch_change": r[9]} for r in turn_rows}
-    # parallel: the secondaries must not touch (the thesis's entanglement concern, L4175)
+    # parallel: the secondaries must not touch (the thesis's entanglement concern, L4147)
     pres = turn_res["parallel_multitow"]
     dmin, tmin = _min_line_distance(pres, ["secondary_1", "secondary_2", "secondary_3"])
     values["parallel_min_secondary_distance"] = dmin
@@ -176,26 +176,26 @@ def run(ctx: CaseContext) -> dict:
     inside = all(v["advance_deficit"] > 1.0 for v in tr.values())
     deeper = all(v["depth_increase"] > 0 for v in tr.values())
     claims = [
-        {"claim": "Two-part tow reduces fish heave against the conventional tow (Table 4.1, L3933)",
+        {"claim": "Two-part tow reduces fish heave against the conventional tow (Table 4.1, L3939)",
          "holds": values["fish_heave_tp1"] < values["fish_heave_conv"],
          "evidence": f"fish heave amplitude {fmt(values['fish_heave_tp1'])} m vs {fmt(values['fish_heave_conv'])} m "
                      f"({values['heave_reduction_pct']:.0f} % less)"},
-        {"claim": "Two-part tow reduces fish pitch significantly (L3933)",
+        {"claim": "Two-part tow reduces fish pitch significantly (L3939)",
          "holds": values["fish_pitch_tp1"] < values["fish_pitch_conv"],
          "evidence": f"{fmt(values['fish_pitch_tp1'])}° vs {fmt(values['fish_pitch_conv'])}° "
                      f"({values['pitch_change_pct']:+.0f} %); depends on the light fish's assumed pitch damping "
                      f"and weathervane stiffness (sensitivity table)"},
-        {"claim": "Fish surge tends to increase marginally with the two-part tow (L3933)",
+        {"claim": "Fish surge tends to increase marginally with the two-part tow (L3939)",
          "holds": values["fish_surge_tp1"] > values["fish_surge_conv"],
          "evidence": f"{fmt(values['fish_surge_tp1'])} m vs {fmt(values['fish_surge_conv'])} m "
                      f"({values['surge_change_pct']:+.0f} %: an increase, but not marginal)"},
-        {"claim": "Two-Part Tow 1 (junction above the depressor) pitches less than Tow 2 (Fig. 4.12, L3935)",
+        {"claim": "Two-Part Tow 1 (junction above the depressor) pitches less than Tow 2 (Fig. 4.12, L3941)",
          "holds": values["fish_pitch_tp1"] < values["fish_pitch_tp2"],
          "evidence": f"{fmt(values['fish_pitch_tp1'])}° vs {fmt(values['fish_pitch_tp2'])}°"},
-        {"claim": "In the 180° turns every body tracks inside the ship's turning circle (L3944, L4175)",
+        {"claim": "In the 180° turns every body tracks inside the ship's turning circle (L3944, L4147)",
          "holds": inside, "evidence": "every body's furthest advance along the original heading falls short of the ship's "
-                                      "(x0 + 25 m), by " + ", ".join(f"{k.split(':')[1]} {fmt(v['advance_deficit'])} m"
-                                                                  for k, v in tr.items())},
+                                      f"(x0 + 25 m), by {fmt(min(v['advance_deficit'] for v in tr.values()))} m or more "
+                                      "(manoeuvre table)"},
         {"claim": "Every body deepens during the turn (Figs 4.14, 4.20, 4.30)", "holds": deeper,
          "evidence": "maximum depth after the turn start exceeds the initial depth for every body"},
     ]
@@ -248,8 +248,11 @@ def run(ctx: CaseContext) -> dict:
         f"Fish pitch: {fmt(values['fish_pitch_tp1'])}° (two-part) vs {fmt(values['fish_pitch_conv'])}° (conventional) "
         "with the embedded scenes. The secondary cable goes slack for part of every cycle "
         f"({values['sec_slack_pct']:.0f} % of the time), and the light fish then pitches freely.",
-        f"Turns: all bodies cut inside the ship's 25 m circle and deepen; parallel tow: the three secondaries stay "
-        f"at least {fmt(dmin)} m apart (t = {fmt(tmin)} s).",
+        ("Turns: every body cuts inside the ship's 25 m circle" if inside else
+         "Turns: NOT every body cuts inside the ship's 25 m circle") +
+        (" and deepens" if deeper else ", and not every body deepens") +
+        f" (largest depth increase {fmt(max(v['depth_increase'] for v in tr.values()))} m); parallel tow: the three "
+        f"secondaries stay at least {fmt(dmin)} m apart (closest at t = {fmt(tmin)} s).",
     ]
     disagreements = []
     if values["fish_pitch_tp1"] >= values["fish_pitch_conv"]:
@@ -335,10 +338,11 @@ def _fig_tow(rec, outdir) -> Figure:
     c, t1 = rec["conventional_tow"], rec["two_part_tow_1"]
     fig, ax = plt.subplots(4, 1, figsize=(9, 10), sharex=True)
     t0 = c.t[0]
-    for k, (key, lab, sc) in enumerate((("surge", "surge (m)", 1), ("heave", "heave (m)", 1),
+    for k, (key, lab, sc) in enumerate((("surge", "surge about mean (m)", 1), ("heave", "heave about mean (m)", 1),
                                         ("pitch", "pitch (°, + nose down)", 1))):
         def get(w, b):
-            return np.degrees(w.bodies[b]["euler"][:, 1]) if key == "pitch" else w.bodies[b][key]
+            x = np.degrees(w.bodies[b]["euler"][:, 1]) if key == "pitch" else w.bodies[b][key]
+            return x - x.mean() if key != "pitch" else x
         ax[k].plot(c.t - t0, get(c, "fish"), label="conventional: fish (300 kg)", color="C3")
         ax[k].plot(t1.t - t0, get(t1, "fish"), label="two-part 1: fish (41.2 kg)", color="C0")
         ax[k].plot(t1.t - t0, get(t1, "depressor"), label="two-part 1: depressor", color="C2", ls="--")
@@ -354,7 +358,7 @@ def _fig_tow(rec, outdir) -> Figure:
     ax[3].legend(loc="upper right", fontsize=8, ncol=3)
     ax[3].grid(alpha=0.3)
     fig.suptitle("Table 4.1: conventional vs Two-Part Tow 1, tow point X 1 m + Z 2 m at 6 s, 3 m/s\n"
-                 "(displacements about the mean tow-point path; cf. thesis Figs 4.6–4.11)", fontsize=10)
+                 "(surge and heave about their means; cf. thesis Figs 4.6–4.11)", fontsize=10)
     return Figure(savefig(fig, outdir, "ch4_conventional_vs_two_part.png"),
                   "Fish and depressor surge, heave, pitch and tensions over the last periods (Table 4.1 cases).")
 
@@ -375,7 +379,7 @@ def _fig_tp12(rec, outdir) -> Figure:
 
 def _fig_turn(res, scene, outdir) -> Figure:
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 3, figsize=(13, 4))
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.5), gridspec_kw={"width_ratios": [1.7, 1, 1]})
     ax[0].plot(res.tow_point[:, 0], res.tow_point[:, 1], "k-", label="ship")
     for b, col in (("depressor", "C2"), ("fish", "C0")):
         p = res.bodies[b]["position"]
@@ -401,7 +405,7 @@ def _fig_turn(res, scene, outdir) -> Figure:
 
 def _fig_multi(turn_res, outdir) -> Figure:
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(2, 2, figsize=(12, 8))
+    fig, ax = plt.subplots(2, 2, figsize=(14, 7.5), gridspec_kw={"width_ratios": [1.6, 1]})
     for row, name in enumerate(("series_multitow", "parallel_multitow")):
         res = turn_res[name]
         ax[row, 0].plot(res.tow_point[:, 0], res.tow_point[:, 1], "k-", label="ship")

@@ -1,0 +1,221 @@
+"""Run trained policies and the baselines on the evaluation sea states with common random numbers.
+
+Every controller runs every episode of the evaluation list — ``env.unwrapped.eval_sea_states()``
+(optionally with ``replicates`` extra wave seeds per entry: seed + 100·r) — with the same sea state,
+wave seed and environment seed, so paired comparisons (compensation ratios, relative reductions) are
+per episode.
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .baselines import REFERENCE, baseline_names, load_tuned, make_baseline
+from .common import ObsReader, env_kind, sea_key, sea_label
+from .metrics import (EpisodeRecord, bootstrap_mean_ci, default_discard, episode_metrics, paired_reduction_ci,
+                      rollout)
+
+__all__ = ["Controller", "EvalResult", "eval_episodes", "make_eval_env", "run_evaluation", "GOALS"]
+
+#: physics-relevant keywords that must agree between a policy's environment and the baselines'
+_PHYSICS_KEYS = ("scene", "scene_overrides", "control_hz", "dt", "winch_max_speed", "winch_max_acceleration",
+                 "winch_travel", "stiffness_floor", "damping_floor", "sim_overrides", "body")
+
+
+def make_eval_env(env_id: str, env_kwargs: dict | None = None, wrappers=None):
+    import gymnasium as gym
+    import towenv.envs  # noqa: F401
+    from .zoo import apply_wrappers
+    env = gym.make(env_id, **dict(env_kwargs or {}))
+    return apply_wrappers(env, wrappers) if wrappers else env
+
+
+@dataclass
+class Controller:
+    name: str
+    policy: Any
+    env: Any
+    kind: str                       # "trained" | "baseline"
+    description: str = ""
+    meta: dict = field(default_factory=dict)
+
+
+def eval_episodes(env, replicates: int = 1, indices=None):
+    """The evaluation list ``[(group_key, label, sea, seed)]``: the environment's fixed set (entries
+    ``indices``, default all), each with ``replicates`` wave seeds (seed, seed + 100, ...)."""
+    ev = env.unwrapped.eval_sea_states()
+    codes = getattr(env.unwrapped, "sea_codes", ())
+    idx = range(len(ev)) if indices is None else indices
+    out = []
+    per_code = max(1, len(ev) // max(1, len(codes))) if codes else len(ev)
+    for i in idx:
+        sea, seed = ev[i]
+        code = codes[i // per_code] if codes and i // per_code < len(codes) else None
+        for r in range(max(1, replicates)):
+            out.append((sea_key(sea), sea_label(sea, code), sea, int(seed) + 100 * r))
+    return out
+
+
+@dataclass
+class EvalResult:
+    env_id: str
+    kind: str
+    env_kwargs: dict
+    episodes: list                  # [(group, label, sea, seed)]
+    controllers: list               # [Controller]
+    metrics: dict                   # name -> [per-episode metric dict]
+    records: dict                   # name -> {episode index: EpisodeRecord} (the plotted ones)
+    reference: str
+    discard: float
+    wall_seconds: float
+    summary: dict = field(default_factory=dict)     # name -> group -> metric -> (mean, lo, hi)
+    goals: list = field(default_factory=list)
+
+    @property
+    def groups(self):
+        return list(OrderedDict.fromkeys(g for g, *_ in self.episodes))
+
+    def group_label(self, g):
+        for gg, lab, *_ in self.episodes:
+            if gg == g:
+                return lab
+        return g
+
+
+GOALS = {
+    "compensator": "≥ 30 % lower significant fish heave than the best fixed passive (k, b), pitch not worse, "
+                   "same stroke limit",
+    "winch": "≥ 90 % heave compensation ratio and ≥ 10 % lower RMS heave than the tuned PD/feed-forward winch",
+}
+
+
+def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines: list[str] | None = None,
+                   env_kwargs: dict | None = None, replicates: int = 1, indices=None, discard: float | None = None,
+                   keep_records: str = "first", n_boot: int = 2000, tuned: dict | None = None,
+                   progress: bool = True) -> EvalResult:
+    """Evaluate ``trained`` policies ``[(name, SB3Policy-like, meta)]`` and the ``baselines``.
+
+    The baselines run on ``gym.make(env_id, **env_kwargs)``; each trained policy on its own environment
+    made from its metadata's keywords and wrappers (with ``env_kwargs`` on top), so that its observation
+    layout is the one it was trained with."""
+    t0 = time.time()
+    env_kwargs = dict(env_kwargs or {})
+    base_env = make_eval_env(env_id, env_kwargs)
+    kind = env_kind(base_env.unwrapped)
+    tuned = load_tuned() if tuned is None else tuned
+    names = baseline_names(kind) if baselines is None else list(baselines)
+    ref = REFERENCE[kind]
+    if ref not in names:
+        names.insert(0, ref)
+    ctrls: list[Controller] = []
+    for name, pol, meta in trained:
+        kw = dict(meta.get("env_kwargs") or {})
+        kw.update(env_kwargs)
+        for k in _PHYSICS_KEYS:
+            if kw.get(k) != env_kwargs.get(k):
+                raise ValueError(f"{name}: environment keyword {k!r} = {kw.get(k)!r} differs from the "
+                                 f"evaluation's ({env_kwargs.get(k)!r}); pass it with --env-kwargs")
+        penv = make_eval_env(env_id, kw, meta.get("env_wrapper"))
+        ctrls.append(Controller(name, pol, penv, "trained", f"{meta.get('algo', '?').upper()} policy", meta))
+    for n in names:
+        b = make_baseline(n, base_env, tuned)
+        ctrls.append(Controller(n, b, base_env, "baseline", b.describe()))
+    episodes = eval_episodes(base_env, replicates, indices)
+    u = base_env.unwrapped
+    discard = default_discard(u.episode_seconds) if discard is None else float(discard)
+    metrics: dict[str, list] = {c.name: [] for c in ctrls}
+    records: dict[str, dict] = {c.name: {} for c in ctrls}
+    first_of_group = {}
+    for i, (g, *_rest) in enumerate(episodes):
+        first_of_group.setdefault(g, i)
+    keep = set(first_of_group.values()) if keep_records == "first" else set(range(len(episodes)))
+    for c in ctrls:
+        tc = time.time()
+        for i, (g, lab, sea, seed) in enumerate(episodes):
+            rec = rollout(c.env, c.policy, sea, seed)
+            metrics[c.name].append(episode_metrics(rec, discard))
+            if i in keep:
+                records[c.name][i] = rec
+        if progress:
+            sh = np.mean([m["sig_heave"] for m in metrics[c.name]])
+            print(f"[evaluate] {c.name:>18s}: {len(episodes)} episodes, mean significant heave {sh:.3f} m "
+                  f"({time.time() - tc:.0f} s)", flush=True)
+    # compensation ratios against the reference (same episode)
+    for c in ctrls:
+        for m, r in zip(metrics[c.name], metrics[ref]):
+            m["cr_heave"] = 1.0 - m["rms_heave"] / max(r["rms_heave"], 1e-12)
+            m["cr_heave_sp"] = 1.0 - m["rms_heave_sp"] / max(r["rms_heave_sp"], 1e-12)
+            m["cr_pitch"] = 1.0 - m["rms_pitch_deg"] / max(r["rms_pitch_deg"], 1e-12)
+    res = EvalResult(env_id, kind, env_kwargs, episodes, ctrls, metrics, records, ref, discard, 0.0)
+    res.summary = summarize(res, n_boot)
+    res.goals = assess_goals(res, n_boot)
+    for c in ctrls:
+        if c.env is not base_env:
+            c.env.close()
+    res.wall_seconds = time.time() - t0
+    return res
+
+
+def summarize(res: EvalResult, n_boot: int = 2000) -> dict:
+    out = {}
+    for c in res.controllers:
+        ms = res.metrics[c.name]
+        per = {}
+        for g in res.groups + ["all"]:
+            idx = [i for i, e in enumerate(res.episodes) if g == "all" or e[0] == g]
+            per[g] = {k: bootstrap_mean_ci([ms[i][k] for i in idx], n_boot) for k in ms[0]}
+        out[c.name] = per
+    return out
+
+
+def _paired(res, name, ref, key, idx, n_boot):
+    a = [res.metrics[name][i][key] for i in idx]
+    b = [res.metrics[ref][i][key] for i in idx]
+    return paired_reduction_ci(a, b, n_boot)
+
+
+def assess_goals(res: EvalResult, n_boot: int = 2000) -> list[dict]:
+    """The issue's goals for every trained policy (pooled over the evaluation set, and per sea state)."""
+    goals = []
+    all_idx = list(range(len(res.episodes)))
+    for c in res.controllers:
+        if c.kind != "trained":
+            continue
+        if res.kind == "compensator":
+            if "best_passive" not in res.metrics:
+                continue
+            red = _paired(res, c.name, "best_passive", "sig_heave", all_idx, n_boot)
+            pitch = _paired(res, c.name, "best_passive", "sig_pitch_deg", all_idx, n_boot)
+            hits = sum(m.get("end_stop_hits", 0.0) for m in res.metrics[c.name])
+            hits_bp = sum(m.get("end_stop_hits", 0.0) for m in res.metrics["best_passive"])
+            per = {g: _paired(res, c.name, "best_passive", "sig_heave",
+                              [i for i, e in enumerate(res.episodes) if e[0] == g], n_boot) for g in res.groups}
+            per_pitch = {g: _paired(res, c.name, "best_passive", "sig_pitch_deg",
+                                    [i for i, e in enumerate(res.episodes) if e[0] == g], n_boot) for g in res.groups}
+            goals.append({"policy": c.name, "criterion": "significant heave reduction vs best_passive ≥ 30 %",
+                          "value": red, "target": 0.30, "met": red[0] >= 0.30, "per_group": per})
+            goals.append({"policy": c.name, "criterion": "significant pitch not worse than best_passive "
+                                                         "(reduction ≥ 0)",
+                          "value": pitch, "target": 0.0, "met": pitch[0] >= 0.0, "per_group": per_pitch})
+            goals.append({"policy": c.name, "criterion": "same stroke limit: end-stop hits (policy vs best_passive)",
+                          "value": (hits, hits, hits), "target": hits_bp, "met": hits <= hits_bp, "per_group": {},
+                          "count": True})
+        else:
+            cr = bootstrap_mean_ci([m["cr_heave"] for m in res.metrics[c.name]], n_boot)
+            per_cr = {g: bootstrap_mean_ci([res.metrics[c.name][i]["cr_heave"] for i, e in enumerate(res.episodes)
+                                            if e[0] == g], n_boot) for g in res.groups}
+            goals.append({"policy": c.name, "criterion": "heave compensation ratio CR = 1 − σ/σ_fixed ≥ 90 %",
+                          "value": cr, "target": 0.90, "met": cr[0] >= 0.90, "per_group": per_cr})
+            if "pd_ff" in res.metrics:
+                red = _paired(res, c.name, "pd_ff", "rms_heave", all_idx, n_boot)
+                per = {g: _paired(res, c.name, "pd_ff", "rms_heave",
+                                  [i for i, e in enumerate(res.episodes) if e[0] == g], n_boot) for g in res.groups}
+                goals.append({"policy": c.name, "criterion": "RMS heave reduction vs pd_ff ≥ 10 %", "value": red,
+                              "target": 0.10, "met": red[0] >= 0.10, "per_group": per})
+    return goals

@@ -1,0 +1,351 @@
+"""Evaluation report: ``report.md`` + PNG figures (+ ``report.html``) + ``metrics.csv``/``summary.json``."""
+from __future__ import annotations
+
+import csv
+import datetime as _dt
+import html
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .evaluation import GOALS, EvalResult
+
+__all__ = ["write_report", "markdown_to_html"]
+
+_COLORS = ["#d62728", "#9467bd", "#1f77b4", "#ff7f0e", "#2ca02c", "#8c564b", "#e377c2", "#7f7f7f", "#17becf",
+           "#bcbd22"]
+
+
+def _ci(t, digits=3, pct=False):
+    m, lo, hi = t
+    if m is None or not math.isfinite(m):
+        return "–"
+    if pct:
+        return f"{100 * m:.1f} % [{100 * lo:.1f}, {100 * hi:.1f}]"
+    return f"{m:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def _v(t, digits=3):
+    m = t[0]
+    return "–" if m is None or not math.isfinite(m) else f"{m:.{digits}g}"
+
+
+def _table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join(["---"] * len(header)) + "|"]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return out
+
+
+# ------------------------------------------------------------------------------------------ figures
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _fig_summary(res: EvalResult, path: Path):
+    plt = _plt()
+    names = [c.name for c in res.controllers]
+    groups = res.groups
+    metrics = [("sig_heave", "significant fish heave (m)"), ("sig_pitch_deg", "significant fish pitch (deg)"),
+               ("cr_heave", "heave compensation ratio")]
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    w = 0.8 / len(names)
+    x = np.arange(len(groups))
+    for ax, (key, lab) in zip(axes, metrics):
+        for j, n in enumerate(names):
+            s = res.summary[n]
+            m = np.array([s[g][key][0] for g in groups])
+            lo = np.array([s[g][key][1] for g in groups])
+            hi = np.array([s[g][key][2] for g in groups])
+            ax.bar(x + (j - (len(names) - 1) / 2) * w, m, w, yerr=[m - lo, hi - m], capsize=2, label=n,
+                   color=_COLORS[j % len(_COLORS)])
+        ax.set_xticks(x)
+        ax.set_xticklabels([res.group_label(g).replace(": ", "\n") for g in groups], fontsize=8)
+        ax.set_title(lab, fontsize=10)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=2)
+    fig.suptitle(f"{res.env_id}: mean over episodes with 95 % bootstrap CI", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def _psd(x, dt):
+    from towenv.stats import welch_psd
+    x = np.asarray(x, float)
+    x = x - x.mean()
+    n = x.size
+    nper = int(2 ** math.floor(math.log2(max(16, n // 4))))
+    return welch_psd(x, dt, nperseg=min(nper, n))
+
+
+def _fig_psd(res: EvalResult, path: Path):
+    plt = _plt()
+    groups = res.groups
+    fig, axes = plt.subplots(len(groups), 2, figsize=(12, 3.2 * len(groups)), squeeze=False)
+    for r, g in enumerate(groups):
+        i = next(k for k, e in enumerate(res.episodes) if e[0] == g)
+        for j, c in enumerate(res.controllers):
+            rec = res.records[c.name].get(i)
+            if rec is None:
+                continue
+            win = rec.window(res.discard)
+            for col, key, scale in ((0, "heave", 1.0), (1, "pitch", 180 / math.pi)):
+                w, S = _psd(rec.data[key][win] * scale, rec.dt)
+                axes[r, col].semilogy(w, np.maximum(S, 1e-12), color=_COLORS[j % len(_COLORS)], lw=1.1, label=c.name)
+            if j == 0:
+                w, S = _psd(rec.data["tow_z"][win], rec.dt)
+                axes[r, 0].semilogy(w, np.maximum(S, 1e-12), color="k", lw=0.8, ls=":", label="tow-point heave")
+        axes[r, 0].set_ylabel(f"{res.group_label(g)}\nS (m² s/rad)", fontsize=8)
+        axes[r, 1].set_ylabel("S (deg² s/rad)", fontsize=8)
+        for col in (0, 1):
+            ax = axes[r, col]
+            ax.set_xlim(0, 4)
+            top = max((float(np.max(l.get_ydata())) for l in ax.get_lines()), default=1.0)
+            ax.set_ylim(top * 1e-4, top * 3)
+            ax.grid(alpha=0.3)
+    axes[0, 0].set_title("fish heave PSD (first episode of each sea state)", fontsize=10)
+    axes[0, 1].set_title("fish pitch PSD", fontsize=10)
+    axes[-1, 0].set_xlabel("ω (rad/s)")
+    axes[-1, 1].set_xlabel("ω (rad/s)")
+    axes[0, 0].legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+def _fig_timeseries(res: EvalResult, path: Path, names: list[str]):
+    plt = _plt()
+    groups = res.groups
+    g = groups[len(groups) // 2] if groups else None
+    i = next(k for k, e in enumerate(res.episodes) if e[0] == g)
+    act_key, act_lab = (("stroke", "compensator stroke (m)") if res.kind == "compensator"
+                        else ("winch_dev", "winch length change (m)"))
+    panels = [("heave", "fish heave (m)", 1.0), ("pitch", "fish pitch (deg)", 180 / math.pi),
+              (act_key, act_lab, 1.0), ("top_tension", "top tension (kN)", 1e-3)]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(12, 9), sharex=True)
+    for j, c in enumerate(res.controllers):
+        if c.name not in names:
+            continue
+        rec = res.records[c.name].get(i)
+        if rec is None:
+            continue
+        t = rec.data["t"]
+        for ax, (key, lab, sc) in zip(axes, panels):
+            ax.plot(t, rec.data[key] * sc, lw=0.8, color=_COLORS[j % len(_COLORS)], label=c.name)
+            ax.set_ylabel(lab, fontsize=8)
+    for ax in axes:
+        ax.axvspan(0, res.discard, color="0.9", zorder=-1)
+        ax.grid(alpha=0.3)
+    if res.kind == "compensator" and res.records[res.reference].get(i) is not None:
+        half = res.records[res.reference][i].half_stroke or 1.0
+        axes[2].axhline(half, color="k", lw=0.6, ls="--")
+        axes[2].axhline(-half, color="k", lw=0.6, ls="--")
+    axes[0].legend(fontsize=7, ncol=4)
+    axes[0].set_title(f"time series, {res.group_label(g)}, wave seed {res.episodes[i][3]} "
+                      f"(grey: discarded start-up window)", fontsize=10)
+    axes[-1].set_xlabel("t (s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------ markdown
+def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str = "", html_too: bool = False,
+                 plots: bool = True) -> Path:
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    names = [c.name for c in res.controllers]
+    trained = [c for c in res.controllers if c.kind == "trained"]
+    figs = []
+    if plots:
+        _fig_summary(res, out / "summary.png")
+        _fig_psd(res, out / "psd.png")
+        best_bl = {"compensator": ["best_passive", "hover"], "winch": ["pd_ff", "constant_tension"]}[res.kind]
+        _fig_timeseries(res, out / "timeseries.png", [c.name for c in trained] + [res.reference] + best_bl)
+        figs = ["summary.png", "psd.png", "timeseries.png"]
+    L: list[str] = [f"# {title}", ""]
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    L += [f"Environment `{res.env_id}`, evaluated {now} in {res.wall_seconds:.0f} s. "
+          f"{len(res.episodes)} episodes per controller ({len(res.groups)} sea states), common random numbers "
+          f"(same sea state, wave seed and environment seed for every controller).", ""]
+    if command:
+        L += ["Reproduce:", "", "```", command, "```", ""]
+    L += [f"Scored window: t ≥ {res.discard:g} s of each episode. Significant amplitude = 2σ; compensation ratio "
+          f"CR = 1 − σ/σ_ref with the reference `{res.reference}` on the same episode (σ about the episode mean; "
+          f"`CR sp` uses the RMS about the steady-tow depth instead). Brackets: 95 % percentile-bootstrap CI "
+          f"over episodes (paired for reductions). Definitions: `docs/agents.md`.", ""]
+    if res.env_kwargs:
+        L += [f"Environment keywords: `{json.dumps(res.env_kwargs, default=str)}`", ""]
+
+    # ---- goals
+    L += ["## Goals", "", f"Issue goal ({res.kind}): {GOALS[res.kind]}.", ""]
+    if res.goals:
+        rows = []
+        for gdef in res.goals:
+            if gdef.get("count"):
+                val = f"{gdef['value'][0]:.0f} (best_passive: {gdef['target']:.0f})"
+            else:
+                val = _ci(gdef["value"], pct=True)
+            per = "; ".join(f"{res.group_label(g).split(':')[0]}: {100 * v[0]:.1f} %" for g, v in gdef["per_group"].items())
+            rows.append([f"`{gdef['policy']}`", gdef["criterion"], val, "**met**" if gdef["met"] else "**not met**",
+                         per or "–"])
+        L += _table(["policy", "criterion", "measured (pooled)", "status", "per sea state"], rows) + [""]
+    else:
+        L += ["No trained policy in this evaluation (baselines only).", ""]
+
+    # ---- controllers
+    L += ["## Controllers", ""]
+    rows = []
+    for c in res.controllers:
+        extra = ""
+        if c.kind == "trained":
+            m = c.meta
+            extra = (f"{m.get('algo', '?').upper()}, {m.get('num_timesteps', '?')} steps"
+                     + (f", {m.get('wall_seconds_this_session')} s" if m.get("wall_seconds_this_session") else "")
+                     + (f"; selected: {m.get('selected')}" if m.get("selected") else ""))
+        acts = getattr(c.policy, "acts_on", "observations")
+        rows.append([f"`{c.name}`", c.kind, acts, (c.description + ("; " + extra if extra else "")).replace("|", "/")])
+    L += _table(["name", "kind", "acts on", "description"], rows) + [""]
+
+    # ---- main table per sea state
+    L += ["## Fish motion per sea state", ""]
+    for g in res.groups + ["all"]:
+        lab = "all sea states" if g == "all" else res.group_label(g)
+        n_ep = len([e for e in res.episodes if g == "all" or e[0] == g])
+        L += [f"### {lab} ({n_ep} episodes)", ""]
+        rows = []
+        for n in names:
+            s = res.summary[n][g]
+            rows.append([f"`{n}`", _ci(s["sig_heave"]), _ci(s["rms_heave"]), _ci(s["cr_heave"], pct=True),
+                         _ci(s["cr_heave_sp"], pct=True), _ci(s["sig_pitch_deg"], 2), _ci(s["cr_pitch"], pct=True),
+                         _v(s["mean_heave"], 3)])
+        L += _table(["controller", "sig. heave (m)", "RMS heave σ (m)", "CR heave", "CR sp", "sig. pitch (deg)",
+                     "CR pitch", "mean heave (m)"], rows) + [""]
+
+    # ---- rates vs Table 6.1
+    L += ["## Motion rates vs thesis Table 6.1 limits (heave 1 m/s, pitch 6.28 °/s), all sea states", ""]
+    rows = []
+    for n in names:
+        s = res.summary[n]["all"]
+        rows.append([f"`{n}`", _ci(s["rms_heave_rate"]), _v(s["max_heave_rate"]),
+                     f"{100 * s['frac_heave_rate_over'][0]:.2f} %", _ci(s["rms_pitch_rate_deg"], 2),
+                     _v(s["max_pitch_rate_deg"]), f"{100 * s['frac_pitch_rate_over'][0]:.2f} %"])
+    L += _table(["controller", "RMS heave rate (m/s)", "max (m/s)", "time over", "RMS pitch rate (°/s)",
+                 "max (°/s)", "time over"], rows) + [""]
+
+    # ---- actuator and tension constraints
+    L += ["## Actuator use and tensions, all sea states (mean over episodes)", ""]
+    rows = []
+    for n in names:
+        s = res.summary[n]["all"]
+        if res.kind == "compensator":
+            act = [_v(s["stroke_max_frac"]), _v(s["stroke_1000_frac"]), f"{sum(m['end_stop_hits'] for m in res.metrics[n]):.0f}",
+                   _v(s["mean_stiffness"], 4), _v(s["mean_damping"], 4)]
+        else:
+            act = [_v(s["winch_dev_max_frac"]), _v(s["winch_rms_speed"]), f"{100 * s['winch_frac_at_limit'][0]:.2f} %"]
+        term = sum(m["terminated"] for m in res.metrics[n])
+        fail = sum(m["failure"] for m in res.metrics[n])
+        rows.append([f"`{n}`"] + act + [f"{s['top_tension_max'][0] / 1e3:.2f}", f"{s['top_tension_min'][0] / 1e3:.2f}",
+                                         f"{s['top_tension_std'][0] / 1e3:.3f}", f"{s['min_tension_all'][0]:.0f}",
+                                         f"{sum(m['slack_steps'] for m in res.metrics[n]):.0f}", f"{term:.0f}/{fail:.0f}"])
+    if res.kind == "compensator":
+        hdr = ["controller", "max stroke / half", "1/1000 stroke height / stroke", "end-stop hits (total)",
+               "mean k (N/m)", "mean b (N s/m)"]
+    else:
+        hdr = ["controller", "max length change / travel", "RMS payout speed (m/s)", "time at travel limit"]
+    hdr += ["top T max (kN)", "top T min (kN)", "top T σ (kN)", "min segment T (N)", "slack steps",
+            "terminated/failed"]
+    L += _table(hdr, rows) + [""]
+
+    if figs:
+        L += ["## Figures", "", "![summary](summary.png)", "", "![PSD](psd.png)", "", "![time series](timeseries.png)",
+              ""]
+
+    # ---- episodes
+    L += ["## Evaluation episodes", ""]
+    rows = [[i, lab, f"{sea.heading_deg:g}", seed] for i, (g, lab, sea, seed) in enumerate(res.episodes)]
+    L += _table(["#", "sea state", "heading (deg)", "wave seed"], rows) + [""]
+    L += ["Per-episode metrics: `metrics.csv`; aggregated values: `summary.json`.", ""]
+    md = "\n".join(L)
+    (out / "report.md").write_text(md)
+    _write_data(res, out)
+    if html_too:
+        (out / "report.html").write_text(markdown_to_html(md, title))
+    return out / "report.md"
+
+
+def _write_data(res: EvalResult, out: Path):
+    keys = sorted(next(iter(res.metrics.values()))[0].keys())
+    with open(out / "metrics.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["controller", "episode", "sea_state", "heading_deg", "wave_seed"] + keys)
+        for n, ms in res.metrics.items():
+            for i, m in enumerate(ms):
+                g, lab, sea, seed = res.episodes[i]
+                w.writerow([n, i, g, sea.heading_deg, seed] + [f"{m.get(k, float('nan')):.6g}" for k in keys])
+    summ = {n: {g: {k: list(v) for k, v in d.items()} for g, d in per.items()} for n, per in res.summary.items()}
+    goals = [{k: (list(v) if isinstance(v, tuple) else v) for k, v in gd.items() if k != "per_group"}
+             | {"per_group": {g: list(v) for g, v in gd["per_group"].items()}} for gd in res.goals]
+    meta = {c.name: {"kind": c.kind, "description": c.description,
+                     "meta": {k: v for k, v in c.meta.items() if k in ("algo", "num_timesteps", "seed", "env_kwargs",
+                                                                      "selected", "wall_seconds_this_session")}}
+            for c in res.controllers}
+    (out / "summary.json").write_text(json.dumps({"env_id": res.env_id, "discard": res.discard,
+                                                  "reference": res.reference, "controllers": meta, "goals": goals,
+                                                  "summary": summ}, indent=1, default=str))
+
+
+def markdown_to_html(md: str, title: str) -> str:
+    """A minimal Markdown -> HTML for the report's subset (headings, tables, images, code, paragraphs)."""
+    out = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
+           "<style>body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}table{border-collapse:"
+           "collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px}img{max-width:100%}"
+           "pre{background:#f4f4f4;padding:.5em}</style></head><body>"]
+
+    def inline(s):
+        s = html.escape(s)
+        s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
+        s = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", s)
+        return s
+
+    lines = md.split("\n")
+    i = 0
+    while i < len(lines):
+        ln = lines[i]
+        if ln.startswith("```"):
+            j = i + 1
+            buf = []
+            while j < len(lines) and not lines[j].startswith("```"):
+                buf.append(html.escape(lines[j]))
+                j += 1
+            out.append("<pre>" + "\n".join(buf) + "</pre>")
+            i = j + 1
+            continue
+        m = re.match(r"^(#+) (.*)", ln)
+        if m:
+            n = len(m.group(1))
+            out.append(f"<h{n}>{inline(m.group(2))}</h{n}>")
+        elif ln.startswith("!["):
+            m = re.match(r"!\[([^]]*)\]\(([^)]+)\)", ln)
+            out.append(f"<p><img alt='{html.escape(m.group(1))}' src='{html.escape(m.group(2))}'></p>")
+        elif ln.startswith("|"):
+            rows = []
+            while i < len(lines) and lines[i].startswith("|"):
+                rows.append([c.strip() for c in lines[i].strip().strip("|").split("|")])
+                i += 1
+            out.append("<table><tr>" + "".join(f"<th>{inline(c)}</th>" for c in rows[0]) + "</tr>")
+            for r in rows[2:]:
+                out.append("<tr>" + "".join(f"<td>{inline(c)}</td>" for c in r) + "</tr>")
+            out.append("</table>")
+            continue
+        elif ln.strip():
+            out.append(f"<p>{inline(ln)}</p>")
+        i += 1
+    out.append("</body></html>")
+    return "\n".join(out)
