@@ -122,7 +122,17 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
                 raise ValueError(f"{name}: environment keyword {k!r} = {kw.get(k)!r} differs from the "
                                  f"evaluation's ({env_kwargs.get(k)!r}); pass it with --env-kwargs")
         penv = make_eval_env(env_id, kw, meta.get("env_wrapper"))
-        ctrls.append(Controller(name, pol, penv, "trained", f"{meta.get('algo', '?').upper()} policy", meta))
+        desc = f"{meta.get('algo', '?').upper()} policy"
+        for w in meta.get("env_wrapper") or []:
+            if isinstance(w, dict):
+                for wn, wkw in w.items():
+                    if wn.endswith("ResidualAction"):
+                        wkw = dict(wkw or {})
+                        base = wkw.pop("base", "?")
+                        desc += (f", residual on `{base}` (" + ", ".join(f"{k}={v}" for k, v in wkw.items()) + ")")
+                    else:
+                        desc += f", wrapper {wn}"
+        ctrls.append(Controller(name, pol, penv, "trained", desc, meta))
     for n in names:
         b = make_baseline(n, base_env, tuned)
         ctrls.append(Controller(n, b, base_env, "baseline", b.describe()))

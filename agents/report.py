@@ -206,9 +206,12 @@ def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str 
         extra = ""
         if c.kind == "trained":
             m = c.meta
-            extra = (f"{m.get('algo', '?').upper()}, {m.get('num_timesteps', '?')} steps"
-                     + (f", {m.get('wall_seconds_this_session')} s" if m.get("wall_seconds_this_session") else "")
-                     + (f"; selected: {m.get('selected')}" if m.get("selected") else ""))
+            val = m.get("validation") or {}
+            extra = (f"trained {m.get('num_timesteps', '?')} steps"
+                     + (f" in {m.get('wall_seconds_this_session')} s" if m.get("wall_seconds_this_session") else "")
+                     + (f", seed {m.get('seed')}" if m.get("seed") is not None else "")
+                     + (f"; exported: the validation-best checkpoint at {val['best_timestep']} steps"
+                        if val.get("best_timestep") else (f"; selected: {m.get('selected')}" if m.get("selected") else "")))
         acts = getattr(c.policy, "acts_on", "observations")
         rows.append([f"`{c.name}`", c.kind, acts, (c.description + ("; " + extra if extra else "")).replace("|", "/")])
     L += _table(["name", "kind", "acts on", "description"], rows) + [""]

@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import pickle
 import platform
 import sys
 import tempfile
@@ -42,6 +43,7 @@ EXPLICIT = ("euler", "rk2", "rk4")
 SOLVERS = ("houbolt",) + EXPLICIT
 ZETA = 0.25
 DT_CAP = 1.0          # the scene schema's largest solver.dt
+DT_MIN = 1e-5         # and its smallest
 RAMP = dict(type="half_cosine", duration=8.0)
 
 
@@ -128,7 +130,7 @@ def largest_stable(scene, method, N, ref, band=0.10, cfl=None, zeta=ZETA, rel=No
             lo, hi = None, x
             while lo is None:
                 x = hi * 0.6
-                if x < 1e-3 * cfl:
+                if x < max(0.02 * cfl, DT_MIN):
                     return None, hi, trials[-1]["reason"], trials
                 if test(x):
                     lo = x
@@ -281,27 +283,32 @@ def plot_map(rows, segs, eas, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, len(SOLVERS), figsize=(4.3 * len(SOLVERS), 3.9), squeeze=False)
-    for ax, m in zip(axes[0], SOLVERS):
+    fig, axes = plt.subplots(1, len(SOLVERS), figsize=(4.6 * len(SOLVERS), 4.2), squeeze=False,
+                             gridspec_kw=dict(wspace=0.08))
+    for k, (ax, m) in enumerate(zip(axes[0], SOLVERS)):
         Z = np.full((len(eas), len(segs)), np.nan)
         for r in rows:
             if r["solver"] == m and r["lo"]:
                 Z[eas.index(r["ea"]), segs.index(r["segments"])] = math.log10(r["lo"])
-        im = ax.imshow(Z, origin="lower", cmap="viridis", vmin=-5, vmax=0, aspect="auto")
+        im = ax.imshow(Z, origin="lower", cmap="viridis", vmin=-4.5, vmax=0, aspect="auto")
         for r in rows:
             if r["solver"] != m:
                 continue
             i, j = eas.index(r["ea"]), segs.index(r["segments"])
-            txt = (fmt(r["lo"]) + ("+" if r["hi"] is None else "") + f"\n{r['lo'] / r['cfl']:.3g}×CFL") if r["lo"] else "none"
-            ax.text(j, i, txt, ha="center", va="center", fontsize=7,
-                    color="white" if (r["lo"] or 1) < 0.03 else "black")
+            if r["lo"]:
+                top = ("≥" if r["hi"] is None else "") + fmt(r["lo"]).replace(" ", "\u2009")
+                txt = f"{top}\n{r['lo'] / r['cfl']:.3g}×"
+            else:
+                txt = "none"
+            ax.text(j, i, txt, ha="center", va="center", fontsize=7.5,
+                    color="black" if (r["lo"] or 1e-9) > 0.05 else "white")
         ax.set_xticks(range(len(segs)), [str(s) for s in segs])
-        ax.set_yticks(range(len(eas)), [f"EA×{e:g}" for e in eas])
+        ax.set_yticks(range(len(eas)), [f"EA×{e:g}" for e in eas] if k == 0 else [])
         ax.set_xlabel("segments")
-        ax.set_title(f"{m}: largest stable Δt", fontsize=10)
-    fig.colorbar(im, ax=axes[0].tolist(), label="log10(Δt_max / s)", shrink=0.85)
-    fig.suptitle("Shared deck (2 m/s, 1 m heave at 8 s): largest stable time step "
-                 "(+ = stable at the 1 s cap; ×CFL = Δt_max / (l/c_L))", fontsize=10)
+        ax.set_title(f"{m}", fontsize=10)
+    fig.colorbar(im, ax=axes[0].tolist(), label="log10(largest stable Δt / s)", shrink=0.85, pad=0.02)
+    fig.suptitle("Shared deck (2 m/s, 1 m heave at 8 s): largest stable Δt and Δt_max/(l/c_L) "
+                 "(≥ = stable at the 1 s cap of solver.dt)", fontsize=10)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -325,7 +332,7 @@ def plot_cfl(rows, path):
     h = [Line2D([], [], color=c, marker="o", ls="", label=s) for s, c in colors.items()]
     h += [Line2D([], [], color="0.3", marker=m, ls="", label=f"EA×{e:g}") for e, m in mk.items()]
     h += ax.get_legend_handles_labels()[0]
-    ax.legend(handles=h, fontsize=8, loc="center right")
+    ax.legend(handles=h, fontsize=8, loc="lower right")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("axial CFL step l/c_L (s)")
@@ -435,10 +442,21 @@ thesis's tension recursion "as published" (which fails outright, tests/test_twin
                 c += f"; fails {fmt(hi)}: {why[:60]}"
             cells.append(c)
         o.append(f"| {s['n']} | {s['segments']} | {fmt(s['cfl'])} | " + " | ".join(cells) + " |")
+    none = [(s["n"], m, s["res"][m]) for s in ser for m in EXPLICIT if s["res"][m][0] is None]
+    if none:
+        o.append("\n**No stable Δt** for " + ", ".join(f"{m} with {n} cables" for n, m, _ in none) + ": "
+                 + "; ".join(sorted({r[2][:160] for _, _, r in none})) + ". If the failure is a \"strain above "
+                 "max_strain\" in the first segment of a tail cable at the same simulated time for every Δt, it "
+                 "is not a time-step limit: in the semi-implicit Euler update of `towenv/core/explicit.py` the "
+                 "aft-tow-point nodes integrate the previous step's velocity and drift away from their bodies "
+                 "(2.4 m behind the depressor after 19.5 s here; RK2/RK4 and Houbolt keep them on the body to "
+                 "round-off), so the segment looks 20 % stretched while its tension is 90 N.\n")
     o.append("\n## Where the Newton iteration stops converging (Houbolt)\n")
-    o.append("Mean / largest Newton iterations per step, step halvings taken, and the band check, against Δt; "
-             "the right-hand columns repeat the run with `max_step_cuts = 0` (a step whose Newton iteration "
-             "fails is then a divergence).\n")
+    o.append("Newton iterations per step (all iterations, those of halved sub-steps included, divided by the "
+             "steps taken; in brackets the most in one Newton solve, capped by `max_iterations` = 25), step "
+             "halvings taken, and the band check, against Δt; the right-hand columns repeat the run with "
+             "`max_step_cuts = 0` (a step whose Newton iteration fails is then a divergence). Co_T = c_T Δt/l "
+             "at the reference's peak tension.\n")
     for nw in newton:
         o.append(f"\n**{nw['label']}**\n")
         o.append("| Δt (s) | Co_T | it./step (max) | step cuts | deviation from reference | status | "
@@ -460,6 +478,8 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--doc", type=Path)
     ap.add_argument("--figdir", type=Path)
+    ap.add_argument("--save", type=Path, help="pickle the results (to re-draw with --load)")
+    ap.add_argument("--load", type=Path, help="re-draw the figures and the document from --save output")
     args = ap.parse_args(argv)
     if args.quick:
         doc = args.doc or Path(tempfile.gettempdir()) / "towenv_stability_quick" / "stability.md"
@@ -480,17 +500,26 @@ def main(argv=None):
     def log(m):
         print(m, flush=True)
 
-    log("## stability grid")
-    grid = stability_grid(segs, eas, N, log, args.quick)
+    if args.load:
+        with open(args.load, "rb") as fh:
+            grid, beh, ser, newton, wall, start_load = pickle.load(fh)
+    else:
+        log("## stability grid")
+        grid = stability_grid(segs, eas, N, log, args.quick)
+        log("## behaviour cases")
+        beh = behaviour_cases(N, log, args.quick)
+        log("## series tows")
+        ser = series_cases(40.0, log, counts)
+        log("## Newton sweep")
+        newton = newton_sweep(N, log, dts)
+        wall = time.perf_counter() - t0
+        if args.save:
+            strip = lambda res: {k: (v[0], v[1], v[2], []) for k, v in res.items()}  # noqa: E731
+            with open(args.save, "wb") as fh:
+                pickle.dump((grid, [dict(b, res=strip(b["res"])) for b in beh],
+                             [dict(x, res=strip(x["res"])) for x in ser], newton, wall, start_load), fh)
     plot_map(grid, segs, eas, figdir / "stability_map.png")
     plot_cfl(grid, figdir / "stability_cfl.png")
-    log("## behaviour cases")
-    beh = behaviour_cases(N, log, args.quick)
-    log("## series tows")
-    ser = series_cases(40.0, log, counts)
-    log("## Newton sweep")
-    newton = newton_sweep(N, log, dts)
-    wall = time.perf_counter() - t0
     write_doc(doc, figdir, grid, segs, eas, beh, ser, newton, N, wall, sys.argv[1:] if argv is None else argv,
               args.quick, start_load)
     log(f"wrote {doc} ({wall / 60:.1f} min)")

@@ -17,6 +17,7 @@ import pytest
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
+pytest.importorskip("yaml")          # rl-zoo YAML hyperparameters (PyYAML; should be in the `rl` extra)
 
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO) not in sys.path:

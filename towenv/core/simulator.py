@@ -429,8 +429,9 @@ class Simulator:
                 "max_penetration": float(self.cstate[K.CS_PEN]), "stiffness": float(self.comp[K.C_K]),
                 "damping": float(self.comp[K.C_B])}
 
-    def set_winch(self, speed=None, mode=None, set_tension=None):
-        """Winch payout speed command (m/s, payout > 0), mode (speed / constant_tension) or set tension."""
+    def set_winch(self, speed=None, mode=None, set_tension=None, gain=None, deadband=None):
+        """Winch payout speed command (m/s, payout > 0), mode (speed / constant_tension), and the
+        constant-tension law's set tension (N), gain ((m/s)/N) and deadband (N)."""
         if self.winch[K.W_MODE] == 0:
             raise ValueError("set_winch: the scene has no [winch] section")
         if speed is not None:
@@ -446,6 +447,14 @@ class Simulator:
             if not (np.isfinite(set_tension) and set_tension >= 0):
                 raise ValueError(f"winch.set_tension: must be >= 0 N (got {set_tension!r})")
             self.winch[K.W_TSET] = set_tension
+        if gain is not None:
+            if not (np.isfinite(gain) and gain >= 0):
+                raise ValueError(f"winch.gain: must be >= 0 (m/s)/N (got {gain!r})")
+            self.winch[K.W_GAIN] = gain
+        if deadband is not None:
+            if not (np.isfinite(deadband) and deadband >= 0):
+                raise ValueError(f"winch.deadband: must be >= 0 N (got {deadband!r})")
+            self.winch[K.W_DEADBAND] = deadband
 
     def winch_state(self):
         """Payout speed (m/s), deployed length of the winch line (m), total paid out (m), segments."""

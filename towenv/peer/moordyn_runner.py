@@ -106,7 +106,8 @@ def _deck(scene) -> _Deck:
         probs.append("sea-state vessel motion (use excitation/manoeuvres instead)")
     if sc.compensator is not None or sc.winch is not None:
         probs.append("a compensator or winch")
-    segs = ln.span_segments()
+    juncs = [x.top.distance for x in sc.lines if x.top_kind == "line" and x.top.line == ln.name]
+    segs = ln.span_segments(juncs)
     if len(segs) != 1:
         probs.append("junctions on the cable")
     body = None
