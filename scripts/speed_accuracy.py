@@ -672,17 +672,20 @@ each chart and listed as **unstable** — none are dropped.
                              "ζ = 0.5, hollow ζ = 1).\n")
         if key == "shared_deck":
             out.append(verdict(runs))
+        elif any(r.solver.startswith("MoorDyn") for r in runs):
+            out.append(verdict(runs, title=f"Houbolt against MoorDyn at equal accuracy on {key} (for information)",
+                               label="Result"))
         out.append("<details><summary>All runs</summary>\n\n" + run_table(runs, cfg) + "\n\n</details>\n")
     out.append(observations(results))
     doc_path.parent.mkdir(parents=True, exist_ok=True)
     doc_path.write_text("\n".join(out))
 
 
-def verdict(runs):
+def verdict(runs, title="Is towenv's default solver ahead of MoorDyn at equal accuracy by ≥ 10×?", label="Verdict"):
     eq = equal_accuracy(runs)
     if not eq:
         return "No stable MoorDyn run to compare with.\n"
-    lines = ["\n### Is towenv's default solver ahead of MoorDyn at equal accuracy by ≥ 10×?\n",
+    lines = [f"\n### {title}\n",
              "For every stable MoorDyn run: the cheapest Houbolt run (any segment count) whose combined error is "
              "no larger, and the cost ratio (MoorDyn wall time / Houbolt wall time per simulated second).\n",
              "| MoorDyn run | its error (%) | its real-time factor | cheapest Houbolt run at ≤ that error | "
@@ -703,7 +706,8 @@ def verdict(runs):
     pr = [x[2] for x in pareto if np.isfinite(x[2])]
     ratios = [x[2] for x in usable if np.isfinite(x[2])]
     holds = bool(pr) and min(pr) >= 10
-    txt += (f"**Verdict: {'holds' if holds else 'does not hold'}.** On MoorDyn's cost/accuracy front (the MoorDyn "
+    txt += ((f"**{label}: {'holds' if holds else 'does not hold'}.**" if label == "Verdict" else f"**{label}:**")
+            + " On MoorDyn's cost/accuracy front (the MoorDyn "
             "runs with an error ≤ 10 % that no cheaper MoorDyn run matches in accuracy: "
             + "; ".join(f"{x[0].solver} {x[0].segments} seg dtM {fmt_dt(x[0].dt)} s ζ {x[0].zeta:g}: "
                         f"{fmt_pct(x[0].combined)} % at {x[0].rtf:.0f}× real time → Houbolt "
@@ -720,10 +724,19 @@ def verdict(runs):
         if fr:
             txt += (f" With MoorDyn stepped every {'1.6 ms' if g == 'fine' else '0.01 s'} alone: "
                     f"{min(fr):.1f}×–{max(fr):.1f}× on its front.")
+    below = [x for x in pareto if np.isfinite(x[2]) and x[2] < 10]
+    if label == "Verdict" and below:
+        txt += (" The ≥ 10× claim fails at: " + "; ".join(
+            f"{x[0].solver} {x[0].segments} seg dtM {fmt_dt(x[0].dt)} s ({fmt_pct(x[0].combined)} %, {x[2]:.1f}×)"
+            for x in below) + ". There the accuracy that Houbolt has to match is a top-tension peak within a few "
+            "newtons, the size of the top node's own inertia that towenv's reaction includes and MoorDyn's omits "
+            "(Observations); and single timings on this shared machine move by ~10–20 % between runs.")
     unmatched = [x[0] for x in eq if x[1] is None]
     if unmatched:
-        txt += (" No Houbolt run matched the accuracy of: " + ", ".join(
-            f"{m.solver} {m.segments} seg dtM {fmt_dt(m.dt)} s ({fmt_pct(m.combined)} %)" for m in unmatched) + ".")
+        txt += (" No Houbolt run of the grid (segment counts up to "
+                f"{max(r.segments for r in runs if r.solver == 'houbolt')}) matched the accuracy of: " + ", ".join(
+                    f"{m.solver} {m.segments} seg dtM {fmt_dt(m.dt)} s ({fmt_pct(m.combined)} %)" for m in unmatched)
+                + " — a finer Houbolt grid would be needed to compare there.")
     return txt + "\n"
 
 
@@ -794,8 +807,22 @@ def observations(results):
                        "peak error therefore depends on the coupling step: " + "; ".join(
                            f"{c.solver} {c.segments} seg dtM {fmt_dt(c.dt)} s: {fmt_pct(c.errors.get('tension_peak', float('nan')))} % "
                            f"at Δt_c = 0.01 s vs {fmt_pct(r.errors.get('tension_peak', float('nan')))} % at 1.6 ms"
-                           for c, r in pairs[:6]) + ". (towenv's reaction also includes the top node's own inertia, "
-                       "MoorDyn's does not — a ~m_node·a ≈ 1–2 N difference here.)")
+                           for c, r in pairs[:6]) + ".")
+            sc0 = towenv.load_scene(cfg["scene"])
+            ln = sc0.lines[0]
+            amp = max((e.amplitude * (2 * math.pi / e.period) ** 2 for e in sc0.vessel.excitation), default=0.0)
+            peak = refs["houbolt"].metrics.get("tension_peak", float("nan"))
+            cells = []
+            for n in sorted({r.segments for r in runs if r.solver == "houbolt"}):
+                m_top = (ln.mass_per_length + ln.can * sc0.water.density * math.pi * ln.diameter ** 2 / 4) \
+                    * ln.length / n / 2
+                cells.append(f"{n} segments {m_top:.1f} kg ≈ {m_top * amp:.1f} N = {100 * m_top * amp / peak:.2g} %")
+            out.append(f"* **{key}** — the two codes do not report quite the same top force: towenv's reaction "
+                       "includes the prescribed top node's own half-segment inertia (model.md 2.6), MoorDyn's does not. "
+                       "At the heave's peak acceleration that is at most (transverse mass) " + "; ".join(cells)
+                       + " of the tension peak — the same order as the tension-peak errors that decide the "
+                       "equal-accuracy comparison at 10–20 segments, and in MoorDyn's favour there (the reference, at "
+                       "80 segments, carries only a quarter of the 20-segment share).")
         if md_info and "skipped" not in md_info:
             try:
                 ode = steady_ode_tension(cfg["scene"])
@@ -814,6 +841,20 @@ def observations(results):
 
 
 # ----------------------------------------------------------------------------------------------------
+def _public_args(argv):
+    """The command line as a reader would re-run it: without the --save/--load/--json bookkeeping."""
+    out, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+            continue
+        if a in ("--save", "--load", "--json"):
+            skip = True
+            continue
+        out.append(a)
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="small grid (~3 min), output to a temporary folder")
@@ -868,7 +909,7 @@ def main(argv=None):
         with open(args.save, "wb") as fh:
             pickle.dump(({cfg["key"]: (runs, refs, check, md_info) for cfg, runs, refs, check, md_info in results},
                          wall, START_LOAD, END_MACHINE or machine()), fh)
-    write_doc(results, doc, figdir, wall, sys.argv[1:] if argv is None else argv, args.quick)
+    write_doc(results, doc, figdir, wall, _public_args(sys.argv[1:] if argv is None else argv), args.quick)
     if args.json:
         def clean(r):
             d = asdict(r)

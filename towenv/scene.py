@@ -964,7 +964,8 @@ _TAG_CLASSES = {
 # =====================================================================================================
 class Solver(_Model):
     """Time integration (``method``: ``houbolt`` — implicit, Newton on the tensions, the default;
-    ``euler`` / ``rk2`` / ``rk4`` — explicit, needs Δt below the axial CFL limit; ``quasi_static`` —
+    ``euler`` / ``rk2`` / ``rk4`` — explicit, needs Δt below the axial CFL limit (``axial_damping_ratio``
+    ζ: c = 2ζ l √(EA μ), i.e. MoorDyn's BA = −2ζ); ``quasi_static`` —
     static equilibrium at every step), time step and Newton-iteration settings."""
     method: _choice("houbolt", "euler", "rk2", "rk4", "quasi_static") = "houbolt"
     tension_solve: _choice("tree", "as_published") = "tree"

@@ -212,6 +212,15 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
             r[top_node, i] = top_path[k, i]
             v[top_node, i] = top_v[i]
             prev[i] = top_path[k, i]
+        # aft tow points are carried by their bodies, not integrated
+        lam = ws[8]
+        for b in range(nb):
+            c = topo[10][b]
+            if c < 0:
+                continue
+            K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
+            a = topo[9][b]
+            _cross_add(omg[b], bodyp[0][b, 26:29], lam, v[a], r[a], r[c], v[c])
         # failure detection
         for a in range(nn):
             for i in range(3):
@@ -249,7 +258,7 @@ class ExplicitSimulator(Simulator):
         self.axial_damping_ratio = float(axial_damping_ratio)
         super().__init__(scene, **overrides)
         s = self.system
-        # like MoorDyn's negative BA: a damping ratio of each segment's axial mode, c = 2ζ l √(EA μ)
+        # a damping ratio of each segment's axial mode, c = 2ζ l √(EA μ) (MoorDyn's BA = −2ζ gives the same c)
         self.axial_damping = 2 * self.axial_damping_ratio * s.l0 * np.sqrt(s.ea * s.mu)
         if self.comp[K.C_MODE] > 0 or self.winch[K.W_MODE] > 0:
             raise ValueError("ExplicitSimulator: scenes with a compensator or winch are not supported")
@@ -310,7 +319,8 @@ class ExplicitSimulator(Simulator):
             self.hist_ang[0, b] = self.xang[b]
             self.hist_ang[1, b] = self.xang[b] - dt * dang
             self.hist_ang[2, b] = self.xang[b] - 2 * dt * dang
-        # tow-point reaction: tension and half-segment loads at the top node (its inertia neglected)
+        # tow-point reaction: tension and half-segment loads at the top node; unlike the implicit solver's
+        # reaction it leaves out the top node's own inertia (m_node · a, a few N on the peer deck)
         self.top_react[...] = self._xws[7][self.system.top_node]
 
     def snapshot(self):

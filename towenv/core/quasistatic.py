@@ -1,5 +1,5 @@
 """Quasi-static sequence: at every step the system takes the static equilibrium for the current tow-point
-position and velocity (no inertia, no added mass; drag from the tow-point velocity). The cheapest
+position and the mean-path velocity (no inertia, no added mass; drag from the mean tow velocity). The cheapest
 "solver" behind the common interface, for slow manoeuvres and for charting what dynamics adds.
 
 Bodies, junctions and series tows are handled by the same discrete static march as the start
@@ -25,9 +25,12 @@ class QuasiStaticSimulator(Simulator):
 
     def _run(self, tops, dt, t_start):
         s = self.system
-        prev = self.hist_r[0, s.top_node].copy()
+        times = t_start + dt * (np.arange(len(tops)) + 1)
+        _, heading, speed = self.path.mean_path(times)
         for k in range(len(tops)):
-            u = (tops[k] - prev) / dt
+            # drag from the mean-path velocity: the wave-frequency tow-point motion has no quasi-static
+            # meaning (using it made the bodies fly in a seaway)
+            u = np.array([speed[k] * np.cos(heading[k]), speed[k] * np.sin(heading[k]), 0.0])
             r, T, ang = quasi_static(s, tops[k], u)
             self.hist_r[2] = self.hist_r[1]
             self.hist_r[1] = self.hist_r[0]
@@ -37,7 +40,6 @@ class QuasiStaticSimulator(Simulator):
             self.hist_ang[0] = ang
             self.tens_hist[1] = self.tens_hist[0]
             self.tens_hist[0] = T
-            prev = tops[k]
             self.counters[0] += 1
             self.counters[1] += 1
             self._static_reaction(u)

@@ -351,7 +351,10 @@ class Simulator:
                 self._remesh()
                 continue
             t_fail = t_start + (done + k + 1) * dt
-            raise SimulationDivergence(t_fail, self._element_name(st, el), _CAUSES.get(st, f"status {st}"),
+            cause = _CAUSES.get(st, f"status {st}")
+            if st == K.FAIL_NEWTON:
+                cause = cause.replace("(after step cuts)", f"(after {self.settings.max_step_cuts} step halvings)")
+            raise SimulationDivergence(t_fail, self._element_name(st, el), cause,
                                        int(self.settings.max_iterations), float(md))
 
     def _remesh(self):
