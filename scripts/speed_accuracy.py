@@ -1,6 +1,7 @@
 """Speed against accuracy of every available towenv solver (and MoorDyn on the shared deck).
 
 For each scene, every solver behind ``towenv.make_simulator`` (``houbolt`` — implicit, the default;
+``generalized_alpha`` (ρ∞ = 0.2, the default) / ``newmark`` — implicit on the elastic model;
 ``euler``/``rk2``/``rk4`` — explicit; ``quasi_static``) is run over a grid of time steps and segment
 counts, and its error against a converged reference (Houbolt at a fine step with more segments and a
 100× tighter Newton tolerance) is plotted against the wall time per simulated second (log-log):
@@ -45,13 +46,13 @@ from towenv.peer.decks import axial_cfl_step, shared_deck, total_segments, with_
 
 ROOT = Path(__file__).resolve().parent.parent
 EXPLICIT = ("euler", "rk2", "rk4")
+# implicit one-step schemes on the elastic model (towenv.core.alpha); run at the base segment count only
+ALPHA = ("generalized_alpha", "newmark")
 # towenv explicit axial damping: axial_damping_ratio = 0.25 is MoorDyn's BA = -0.5 (see towenv.peer)
 EXPLICIT_ZETA = 0.25
 START_LOAD = "?"
 END_MACHINE = None
 MISSING_SOLVERS = [
-    ("generalized-α (Chung–Hulbert, tunable ρ∞)", "model.md 5.8 / 8.1; ρ∞ = 0 has Houbolt's eigenvalues"),
-    ("Newmark average acceleration", "model.md 5.8 (no numerical damping)"),
     ("linearised frequency-domain model", "Hover et al. transfer functions exist only as closed-form checks"),
     ("thesis recursion (4.38)–(4.40) \"as published\"", "kept only as a failing regression check (tests/test_twin.py)"),
 ]
@@ -71,7 +72,7 @@ def configs(quick: bool):
         metrics=[("heave", "ball"), ("tension_peak", None)],
         factors=[0.5, 1.0, 2.0], ref_factor=4.0, ref_dt=0.001,
         houbolt=[0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5],
-        explicit=[0.5, 1.0, 1.4, 2.0], qs=[0.05, 0.2],
+        explicit=[0.5, 1.0, 1.4, 2.0], qs=[0.05, 0.2], alpha=[0.005, 0.02, 0.05, 0.2], alpha_factors=[1.0],
         moordyn=dict(factors=[0.5, 1.0, 2.0], zetas=[0.5, 1.0], couplings=[(0.01, [0.5, 1.0]), (0.0016, [0.5])],
                      schemes={"RK2": [2e-4, 4e-4, 8e-4, 1.6e-3], "RK4": [4e-4, 8e-4, 1.6e-3, 3.2e-3]},
                      base_segments=20, settle=400.0),
@@ -83,6 +84,7 @@ def configs(quick: bool):
         factors=[1.0, 2.0, 4.0], ref_factor=8.0, ref_dt=0.002,
         houbolt=[0.005, 0.01, 0.02, 0.05, 0.1, 0.2],
         explicit=[0.5, 1.0, 1.4, 2.0], explicit_factors=[1.0, 2.0], qs=[0.1], qs_factors=[1.0],
+        alpha=[0.01, 0.05, 0.1], alpha_factors=[1.0],
         extra=dict(label="houbolt+comp", scene=ss4, dts=[0.005, 0.01, 0.02, 0.05, 0.1, 0.2]),
         same_segment_refs=True,
     )
@@ -92,21 +94,22 @@ def configs(quick: bool):
         metrics=[("depth", "sled"), ("tension_peak", None)],
         factors=[0.25, 0.5, 1.0], ref_factor=2.0, ref_dt=0.02,
         houbolt=[0.05, 0.1, 0.2, 0.5, 1.0],
-        explicit=[0.5, 1.0, 2.0], qs=[1.0], qs_factors=[0.25, 0.5],
+        explicit=[0.5, 1.0, 2.0], qs=[1.0], qs_factors=[0.25, 0.5], alpha=[0.1, 0.5, 1.0], alpha_factors=[1.0],
         moordyn=dict(factors=[1.0], zetas=[0.5], schemes={"RK2": [1e-3, 2e-3, 3e-3]}, base_segments=100,
                      settle=2000.0),
     )
     if quick:
         a.update(duration=48.0, window=(24.0, 48.0), factors=[1.0], ref_factor=2.0, ref_dt=0.002,
-                 houbolt=[0.005, 0.02, 0.05, 0.1, 0.2], explicit=[0.5, 1.0, 2.0], qs=[0.2],
+                 houbolt=[0.005, 0.02, 0.05, 0.1, 0.2], explicit=[0.5, 1.0, 2.0], qs=[0.2], alpha=[0.02, 0.2],
                  moordyn=dict(factors=[1.0], zetas=[0.5], couplings=[(0.01, [0.5]), (0.0016, [0.5])],
                               schemes={"RK2": [2e-4, 8e-4, 1.6e-3], "RK4": [8e-4, 1.6e-3, 3.2e-3]},
                               base_segments=20, settle=300.0))
         b.update(duration=100.0, window=(30.0, 100.0), factors=[1.0], ref_factor=4.0, ref_dt=0.005,
-                 houbolt=[0.01, 0.05, 0.1], explicit=[0.5, 2.0], qs=[0.2],
+                 houbolt=[0.01, 0.05, 0.1], explicit=[0.5, 2.0], qs=[0.2], alpha=[0.05],
                  extra=dict(label="houbolt+comp", scene=ss4, dts=[0.01, 0.05, 0.1]))
         c.update(duration=300.0, window=(0.0, 300.0), factors=[0.5], ref_factor=1.0, ref_dt=0.05,
-                 houbolt=[0.1, 0.5, 1.0], explicit=[1.0, 2.0], qs=[1.0], qs_factors=[0.25], moordyn=None)
+                 houbolt=[0.1, 0.5, 1.0], explicit=[1.0, 2.0], qs=[1.0], qs_factors=[0.25], alpha=[0.5],
+                 alpha_factors=[0.5], moordyn=None)
     return [a, b, c]
 
 
@@ -318,6 +321,9 @@ def study(cfg, log):
         for m in EXPLICIT if f in cfg.get("explicit_factors", cfg["factors"]) else ():
             for frac in cfg["explicit"]:
                 add(run_towenv(sc, m, round(frac * cfl, 8), cfg))
+        for m in ALPHA if f in cfg.get("alpha_factors", cfg["factors"]) else ():
+            for dt in cfg.get("alpha", []):
+                add(run_towenv(sc, m, dt, cfg))
         if f in cfg.get("qs_factors", cfg["factors"]):
             for dt in cfg["qs"]:
                 add(run_towenv(sc, "quasi_static", dt, cfg))
@@ -434,7 +440,7 @@ def cheapest(runs, solver, level, attr="combined"):
 # plotting
 # ----------------------------------------------------------------------------------------------------
 COLORS = {"houbolt": "tab:blue", "houbolt+comp": "tab:cyan", "euler": "tab:orange", "rk2": "tab:green",
-          "rk4": "tab:red", "quasi_static": "tab:purple", "MoorDyn RK2": "black", "MoorDyn RK4": "tab:gray",
+          "rk4": "tab:red", "quasi_static": "tab:purple", "generalized_alpha": "tab:olive", "newmark": "goldenrod", "MoorDyn RK2": "black", "MoorDyn RK4": "tab:gray",
           "MoorDyn RK2 (Δt_c 1.6 ms)": "tab:brown", "MoorDyn RK4 (Δt_c 1.6 ms)": "tab:pink"}
 MARKERS = ["o", "s", "^", "D", "v", "P"]
 
@@ -603,6 +609,8 @@ def write_doc(results, doc_path, fig_dir, wall_total, argv, quick):
                "total is under 2 s), which damps but does not remove the effect of the other jobs.\n")
     out.append("""**Method.** Every solver behind the one interface `towenv.make_simulator(scene, method=..., dt=...)`
 is run over time steps × segment counts: `houbolt` (implicit, Newton on the segment tensions — the default),
+`generalized_alpha` (ρ∞ = 0.2, the default) / `newmark` (average acceleration) (implicit, Newton on the
+positions of the elastic lumped-mass model, no axial damping; base segment count only),
 `euler` (semi-implicit) / `rk2` / `rk4` (explicit, on the same lumped-mass model, time steps as fractions
 of the axial CFL step l/c_L listed per scene, axial damping `axial_damping_ratio = 0.25`, which is MoorDyn's
 BA = −0.5),
@@ -614,7 +622,7 @@ Cost = wall-clock seconds per simulated second (the inverse of the real-time fac
 Failed runs (`towenv.SimulationDivergence`, MoorDyn "error integrating") are drawn as × on the top row of
 each chart and listed as **unstable** — none are dropped.
 
-**Not implemented, so not in the charts:** """ + "; ".join(f"{a} ({b})" for a, b in MISSING_SOLVERS) + ".\n")
+**Not in the charts:** """ + "; ".join(f"{a} ({b})" for a, b in MISSING_SOLVERS) + ".\n")
     for cfg, runs, refs, check, md_info in results:
         key = cfg["key"]
         ref = refs["houbolt"]
@@ -626,7 +634,10 @@ each chart and listed as **unstable** — none are dropped.
                    f"{', '.join(f'{x:g}' for x in cfg['explicit'])} × l/c_L"
                    + (f" (segments ×{', '.join(f'{x:g}' for x in cfg['explicit_factors'])} only)"
                       if cfg.get('explicit_factors') else "")
-                   + f"; quasi-static Δt {', '.join(f'{d:g}' for d in cfg['qs'])} s.\n")
+                   + f"; quasi-static Δt {', '.join(f'{d:g}' for d in cfg['qs'])} s"
+                   + (f"; generalized-α / Newmark Δt {', '.join(f'{d:g}' for d in cfg['alpha'])} s (segments "
+                      f"×{', '.join(f'{x:g}' for x in cfg.get('alpha_factors', cfg['factors']))})"
+                      if cfg.get("alpha") else "") + ".\n")
         out.append(f"Duration {cfg['duration']:g} s, statistics over t = {win[0]:g}–{win[1]:g} s. Reference: Houbolt, "
                    f"{ref.segments} segments, Δt = {cfg['ref_dt']:g} s: "
                    + ", ".join(f"{k} = {v:.6g}" for k, v in ref.metrics.items()) + ".")
@@ -639,7 +650,8 @@ each chart and listed as **unstable** — none are dropped.
         if "houbolt+comp" in refs:
             out.append("`houbolt+comp` is the scene as published (with its passive compensator), measured against "
                        "its own reference (" + ", ".join(f"{k} = {v:.6g}" for k, v in refs['houbolt+comp'].metrics.items())
-                       + "); the explicit and quasi-static integrators reject compensator scenes (`n/a`).\n")
+                       + "); the explicit, generalized-α/Newmark and quasi-static integrators reject compensator "
+                         "scenes (`n/a`).\n")
         out.append("**Cheapest run of each solver at a given accuracy (combined error):**\n")
         out.append(summary_table(runs) + "\n")
         if check.get("slack"):
@@ -765,6 +777,20 @@ def observations(results):
                 bad = [r.dt for r in rs if r.status == "unstable"]
                 if ok or bad:
                     lims[(s, n)] = (max(ok) if ok else None, min(bad) if bad else None)
+        alims = {}
+        for s in ALPHA:
+            rs = [r for r in runs if r.solver == s]
+            ok = [r.dt for r in rs if r.status == "ok"]
+            bad = [r for r in rs if r.status == "unstable"]
+            if ok or bad:
+                first = min(bad, key=lambda r: r.dt) if bad else None
+                why = first.message.split(": ", 1)[-1].split(" (iterations")[0] if first else ""
+                alims[s] = (max(ok) if ok else None, first.dt if first else None, rs[0].segments, why)
+        if alims:
+            out.append(f"* **{key}** — generalized-α / Newmark step limits seen in the grid (largest completed / "
+                       "smallest failed Δt, and why it failed; linearly both are unconditionally stable): " + "; ".join(
+                           f"{s} {n} seg {fmt_dt(a) if a else '—'} / {fmt_dt(b) if b else '—'} s"
+                           + (f" ({why})" if why else "") for s, (a, b, n, why) in alims.items()) + ".")
         if lims:
             out.append(f"* **{key}** — explicit step limits seen in the grid (largest completed / smallest "
                        "diverged Δt; compare l/c_L): " + "; ".join(
@@ -782,6 +808,14 @@ def observations(results):
                                    f"{r.segments} seg Δt {fmt_dt(r.dt)} s ({fmt_pct(err_of(r))} %)"
                                    for r in wrong) + ("; errors against the same-segment reference" if
                                                       any(r.errors_time for r in wrong) else "") + ".")
+        awrong = [r for r in runs if r.status == "ok" and r.solver in ALPHA and np.isfinite(err_of(r))
+                  and err_of(r) > 0.10]
+        if awrong:
+            out.append(f"* **{key}** — generalized-α / Newmark runs that completed but were wrong by more than 10 % "
+                       "(undamped or weakly damped high-frequency axial ringing of the elastic cable: Newmark has "
+                       "no numerical dissipation): " + "; ".join(
+                           f"{r.solver} {r.segments} seg Δt {fmt_dt(r.dt)} s ({fmt_pct(err_of(r))} %)" for r in awrong)
+                       + ".")
         qs = [r for r in runs if r.solver == "quasi_static" and r.status == "ok"]
         if qs:
             out.append(f"* **{key}** — `quasi_static` errors: " + ", ".join(
@@ -873,7 +907,7 @@ def main(argv=None):
         figdir = args.figdir or ROOT / "docs" / "figures"
     t_start = time.perf_counter()
     # compile the numba kernels once, outside every measurement
-    for m in ("houbolt",) + EXPLICIT:
+    for m in ("houbolt",) + EXPLICIT + ALPHA:
         towenv.make_simulator(shared_deck(segments=4), method=m, dt=1e-3).advance_steps(3)
 
     def log(msg):

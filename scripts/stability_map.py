@@ -1,9 +1,10 @@
 """Stability map: the largest stable time step of every towenv solver, and where it breaks.
 
-For each solver behind ``towenv.make_simulator`` (``houbolt`` implicit; ``euler``/``rk2``/``rk4``
-explicit with axial damping ratio 0.25 — MoorDyn's BA = −0.5; ``quasi_static`` has no time-step limit and
-is only checked), the largest stable Δt is found by bisection (geometric, to 8 % for the explicit schemes
-and 10 % for Houbolt) on the shared deck (peer deck towed at 2 m/s, 1 m tow-point heave at 8 s, 8 s
+For each solver behind ``towenv.make_simulator`` (``houbolt`` implicit; ``generalized_alpha`` (ρ∞ = 0.2)
+and ``newmark`` implicit on the elastic model; ``euler``/``rk2``/``rk4`` explicit with axial damping ratio
+0.25 — MoorDyn's BA = −0.5; ``quasi_static`` has no time-step limit and is only checked), the largest
+stable Δt is found by bisection (geometric, to 8 % for the explicit schemes and 10 % for the implicit
+ones) on the shared deck (peer deck towed at 2 m/s, 1 m tow-point heave at 8 s, 8 s
 half-cosine ramp, N = 16 s simulated) against segment count (5–80) and cable stiffness (EA × 0.1, 1, 10),
 and compared with the explicit axial CFL step l/c_L.
 
@@ -40,7 +41,10 @@ from towenv.peer.decks import axial_cfl_step, series_tow, shared_deck, total_seg
 
 ROOT = Path(__file__).resolve().parent.parent
 EXPLICIT = ("euler", "rk2", "rk4")
-SOLVERS = ("houbolt",) + EXPLICIT
+ALPHA = ("generalized_alpha", "newmark")      # implicit one-step schemes on the elastic model (ρ∞ default)
+SOLVERS = ("houbolt",) + ALPHA + EXPLICIT
+COLORS = {"houbolt": "tab:blue", "generalized_alpha": "tab:olive", "newmark": "goldenrod", "euler": "tab:orange",
+          "rk2": "tab:green", "rk4": "tab:red"}
 ZETA = 0.25
 DT_CAP = 1.0          # the scene schema's largest solver.dt
 DT_MIN = 1e-5         # and its smallest
@@ -306,7 +310,7 @@ def plot_map(rows, segs, eas, path):
         ax.set_xticks(range(len(segs)), [str(s) for s in segs])
         ax.set_yticks(range(len(eas)), [f"EA×{e:g}" for e in eas] if k == 0 else [])
         ax.set_xlabel("segments")
-        ax.set_title(f"{m}", fontsize=10)
+        ax.set_title({"generalized_alpha": "generalized_alpha (ρ∞ 0.2)"}.get(m, m), fontsize=10)
     fig.colorbar(im, ax=axes[0].tolist(), label="log10(largest stable Δt / s)", shrink=0.85, pad=0.02)
     fig.suptitle("Shared deck (2 m/s, 1 m heave at 8 s): largest stable Δt and Δt_max/(l/c_L) "
                  "(≥ = stable at the 1 s cap of solver.dt)", fontsize=10)
@@ -320,7 +324,7 @@ def plot_cfl(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    colors = {"houbolt": "tab:blue", "euler": "tab:orange", "rk2": "tab:green", "rk4": "tab:red"}
+    colors = COLORS
     mk = {0.1: "v", 1.0: "o", 10.0: "^"}
     for r in rows:
         if r["lo"]:
@@ -373,6 +377,23 @@ def summary(grid, beh, ser, newton):
                     + ", ".join(f"{100 * r['dev']:.2g} % at {r['dt']:g} s" for r in newton[0]["rows"]
                                 if r["max_cuts"] == 4 and r["dt"] in (0.05, 0.1, 0.3, 1.0))
                     if newton else "") + " (Newton table below).")
+    for m in ALPHA:
+        rs = [r for r in grid if r["solver"] == m and r["lo"]]
+        if rs:
+            capped = [r for r in rs if r["hi"] is None]
+            band = sum(1 for r in rs if r["hi"] is not None and "out of band" in r["why"])
+            newton_fail = sum(1 for r in rs if r["hi"] is not None and "Newton" in r["why"])
+            o.append(f"* **{m}**: largest stable Δt {fmt(min(r['lo'] for r in rs))}–{fmt(max(r['lo'] for r in rs))} = "
+                     f"{min(r['lo'] / r['cfl'] for r in rs):.0f}×–{max(r['lo'] / r['cfl'] for r in rs):.0f}× the "
+                     f"explicit step l/c_L (stable at the cap in {len(capped)} of {len(rs)} cells). Linearly "
+                     "unconditionally stable"
+                     + ("." if len(capped) == len(rs) else
+                        "; at the smallest failing step "
+                        f"{newton_fail} cell(s) stopped because the Newton iteration on the node positions of the "
+                        "stiff elastic cable did not converge even with 4 step halvings (a large step rotates the "
+                        f"segments and the linearised axial springs overshoot), {band} left the band (accuracy"
+                        + (", and undamped axial ringing: no numerical dissipation" if m == "newmark" else "")
+                        + ")."))
     for b in beh:
         lo_h = b["res"]["houbolt"][0]
         ex = [(m, b["res"][m][0]) for m in EXPLICIT if b["res"][m][0]]
@@ -411,19 +432,21 @@ def write_doc(doc, figdir, grid, segs, eas, beh, ser, newton, N, wall, argv, qui
          f"""**Criterion.** A time step is *stable* if the run covers N = {N:g} s without
 `towenv.SimulationDivergence` **and** its top tension stays within a band of a reference run (Houbolt,
 Δt = 2 ms, same scene): max |T(t) − T_ref(t)| ≤ band × max T_ref, band 10 % (25 % in the slack and snap
-cases). The largest stable Δt is bisected geometrically to 8 % (explicit) / 10 % (Houbolt); the value shown
+cases). The largest stable Δt is bisected geometrically to 8 % (explicit) / 10 % (implicit); the value shown
 is the largest Δt that passed, and the smallest that failed is listed with its reason. Solvers: `houbolt`
-(implicit default, Newton on the segment tensions, up to 4 step halvings per step), `euler`
+(implicit default, Newton on the segment tensions, up to 4 step halvings per step), `generalized_alpha`
+(ρ∞ = 0.2, the default) and `newmark` (average acceleration) (implicit one-step schemes on the elastic
+model, Newton on the node positions, up to 4 step halvings, no axial damping), `euler`
 (semi-implicit), `rk2`, `rk4` (explicit, same model, axial damping ratio {ZETA} ≡ MoorDyn BA = −{2 * ZETA:g}).
 `solver.dt` is capped at {DT_CAP:g} s by the scene schema, so "{fmt(DT_CAP)}+" means stable at the cap.
-Not implemented (so not mapped): generalized-α, Newmark, the linearised frequency-domain model and the
-thesis's tension recursion "as published" (which fails outright, tests/test_twin.py).
+Not mapped: the linearised frequency-domain model and the thesis's tension recursion "as published"
+(`solver.tension_solve`, which fails outright at the thesis's own step guide, tests/test_explicit.py).
 """,
          summary(grid, beh, ser, newton),
          "## Map: shared deck (peer deck at 2 m/s, 1 m heave at 8 s, 8 s ramp)\n",
          f"![stability map]({rel}/stability_map.png)\n",
          f"![against CFL]({rel}/stability_cfl.png)\n",
-         "| EA | segments | l/c_L | houbolt | euler | rk2 | rk4 |", "|---|---|---|---|---|---|---|"]
+         "| EA | segments | l/c_L | " + " | ".join(SOLVERS) + " |", "|---|---|---|" + "---|" * len(SOLVERS)]
     for ea in eas:
         for n in segs:
             cells = []
@@ -437,6 +460,8 @@ thesis's tension recursion "as published" (which fails outright, tests/test_twin
                 c = f"{fmt(r['lo'])}{'+' if r['hi'] is None else ''} ({r['lo'] / r['cfl']:.3g}×)"
                 if m == "houbolt":
                     c += f", Co_T {r['co_t']:.2g}"
+                elif m in ALPHA and r["hi"] is not None:
+                    c += f"; fails {fmt(r['hi'])}"
                 cells.append(c)
             o.append(f"| ×{ea:g} | {n} | {fmt(cfl)} | " + " | ".join(cells) + " |")
     o.append("\n(×) = Δt_max / (l/c_L). Co_T = c_T Δt/l with c_T from the reference's peak top tension "
@@ -456,16 +481,16 @@ thesis's tension recursion "as published" (which fails outright, tests/test_twin
         for r in lim:
             o.append(f"  * EA ×{r['ea']:g}, {r['segments']} segments: largest stable {fmt(r['lo'])}, "
                      f"fails at {fmt(r['hi'])}: {r['why'][:160]}")
-    o.append("\nSmallest failing step and reason per explicit cell:\n")
+    o.append("\nSmallest failing step and reason per generalized-α / Newmark / explicit cell:\n")
     o.append("| EA | segments | solver | largest stable | smallest failing | reason |")
     o.append("|---|---|---|---|---|---|")
     for r in grid:
-        if r["solver"] in EXPLICIT:
+        if r["solver"] in ALPHA + EXPLICIT:
             o.append(f"| ×{r['ea']:g} | {r['segments']} | {r['solver']} | {fmt(r['lo'])} | {fmt(r['hi'])} | "
                      f"{r['why'][:140]} |")
     o.append("\n## Behaviour cases (20 segments)\n")
-    o.append("| case | reference (Houbolt 2 ms) | houbolt | euler | rk2 | rk4 | quasi_static (Δt 0.05 s) |")
-    o.append("|---|---|---|---|---|---|---|")
+    o.append("| case | reference (Houbolt 2 ms) | " + " | ".join(SOLVERS) + " | quasi_static (Δt 0.05 s) |")
+    o.append("|---|---|" + "---|" * (len(SOLVERS) + 1))
     for b in beh:
         i = b["info"]
         cells = []
@@ -485,11 +510,12 @@ thesis's tension recursion "as published" (which fails outright, tests/test_twin
     o.append("\n## More than three cables in series, solved together (series_multitow, 180° turn)\n")
     o.append("Built with `towenv.peer.decks.series_tow(n)`: the thesis Table 4.2 tow with further 30 m / 3-segment "
              "cables and copies of fish 1 appended. All sub-systems are solved in one Newton iteration.\n")
-    o.append("| cables in series | segments | l/c_L | houbolt | houbolt, no step cuts | euler | rk2 | rk4 |")
-    o.append("|---|---|---|---|---|---|---|---|")
+    o.append("| cables in series | segments | l/c_L | houbolt | houbolt, no step cuts | "
+             + " | ".join(ALPHA + EXPLICIT) + " |")
+    o.append("|---|---|---|---|---|" + "---|" * len(ALPHA + EXPLICIT))
     for s in ser:
         cells = []
-        for m in ("houbolt", "houbolt, no step cuts") + EXPLICIT:
+        for m in ("houbolt", "houbolt, no step cuts") + ALPHA + EXPLICIT:
             lo, hi, why, _ = s["res"][m]
             c = f"{fmt(lo)}{'+' if lo and hi is None else ''}"
             if hi is not None:

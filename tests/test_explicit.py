@@ -41,8 +41,8 @@ def test_explicit_rejects_bad_options():
 
 
 def test_solver_method_selects_the_integrator():
-    """One interface: the scene's solver.method picks Houbolt, an explicit scheme or the quasi-static
-    sequence; all agree on a steady tow (the quasi-static sequence exactly, the others to 1e-4)."""
+    """One interface: the scene's solver.method picks Houbolt, generalized-α / Newmark, an explicit scheme or
+    the quasi-static sequence; all agree on a steady tow (the quasi-static sequence exactly, the others to 1e-4)."""
     from towenv.core.explicit import ExplicitSimulator
     from towenv.core.quasistatic import QuasiStaticSimulator
     ref = towenv.simulate(peer_deck(speed=2.0, dt=0.05), duration=5.0).top_tension[-1]
@@ -50,6 +50,12 @@ def test_solver_method_selects_the_integrator():
     assert isinstance(rk4, ExplicitSimulator)
     rk4.advance(5.0)
     assert rk4.top_tension == pytest.approx(ref, rel=1e-4)
+    from towenv.core.alpha import GeneralizedAlphaSimulator
+    for method in ("generalized_alpha", "newmark"):
+        ga = towenv.make_simulator(peer_deck(speed=2.0, dt=0.05), method=method)
+        assert isinstance(ga, GeneralizedAlphaSimulator)
+        ga.advance(5.0)
+        assert ga.top_tension == pytest.approx(ref, rel=1e-4)
     qs = towenv.make_simulator(peer_deck(speed=2.0, dt=0.5), method="quasi_static")
     assert isinstance(qs, QuasiStaticSimulator)
     qs.advance(5.0)

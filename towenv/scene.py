@@ -964,12 +964,15 @@ _TAG_CLASSES = {
 # =====================================================================================================
 class Solver(_Model):
     """Time integration (``method``: ``houbolt`` — implicit, Newton on the tensions, the default;
-    ``euler`` / ``rk2`` / ``rk4`` — explicit, needs Δt below the axial CFL limit (``axial_damping_ratio``
-    ζ: c = 2ζ l √(EA μ), i.e. MoorDyn's BA = −2ζ); ``quasi_static`` —
+    ``generalized_alpha`` (high-frequency spectral radius ``rho_inf``) / ``newmark`` (average
+    acceleration) — implicit, Newton on the positions of the elastic model; ``euler`` / ``rk2`` / ``rk4``
+    — explicit, needs Δt below the axial CFL limit (``axial_damping_ratio`` ζ: c = 2ζ l √(EA μ), i.e.
+    MoorDyn's BA = −2ζ; also used by the two implicit elastic schemes); ``quasi_static`` —
     static equilibrium at every step), time step and Newton-iteration settings."""
-    method: _choice("houbolt", "euler", "rk2", "rk4", "quasi_static") = "houbolt"
+    method: _choice("houbolt", "generalized_alpha", "newmark", "euler", "rk2", "rk4", "quasi_static") = "houbolt"
     tension_solve: _choice("tree", "as_published") = "tree"
     axial_damping_ratio: Num(ge=0, le=10) = 0.0
+    rho_inf: Num(ge=0, le=1) = 0.2
     dt: Num(ge=1e-5, le=1, unit="s") = 0.02
     tolerance: Num(gt=0, unit="N") = 0.5
     relative_tolerance: Num(ge=0, lt=1) = 1e-5

@@ -14,7 +14,7 @@ def make_simulator(scene, **overrides) -> Simulator:
     (overridable: ``make_simulator(scene, method="rk2")``)."""
     from .simulator import load
     solver_keys = ("method", "dt", "tolerance", "relative_tolerance", "angle_tolerance", "max_iterations",
-                   "max_step_cuts", "max_strain", "settle_time", "axial_damping_ratio")
+                   "max_step_cuts", "max_strain", "settle_time", "axial_damping_ratio", "rho_inf")
     sc = load(scene, {("solver." + k if k in solver_keys else k): v for k, v in overrides.items()}
               if overrides else None)
     method = sc.solver.method
@@ -23,10 +23,14 @@ def make_simulator(scene, **overrides) -> Simulator:
     if method in ("euler", "rk2", "rk4"):
         from .explicit import ExplicitSimulator
         return ExplicitSimulator(sc, scheme=method, axial_damping_ratio=sc.solver.axial_damping_ratio)
+    if method in ("generalized_alpha", "newmark"):
+        from .alpha import GeneralizedAlphaSimulator
+        return GeneralizedAlphaSimulator(sc, method=method, rho_inf=sc.solver.rho_inf,
+                                         axial_damping_ratio=sc.solver.axial_damping_ratio)
     if method == "quasi_static":
         from .quasistatic import QuasiStaticSimulator
         return QuasiStaticSimulator(sc)
-    raise ValueError(f"solver.method: must be one of houbolt, euler, rk2, rk4, quasi_static (got {method!r})")
+    raise ValueError(f"solver.method: must be one of houbolt, generalized_alpha, newmark, euler, rk2, rk4, quasi_static (got {method!r})")
 
 
 def simulate(scene, duration: float, record_interval: float | None = None, progress: bool = False,
