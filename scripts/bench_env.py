@@ -1,20 +1,21 @@
-"""Benchmark of the Gymnasium environments (towenv.envs): steps/s, reset time, vector-env throughput.
+"""Benchmark of the Gymnasium environments (towenv.envs): steps/s, reset time, batched vector-env throughput.
 
-One process, one core (numba kernels warmed up first; SB3/torch imported only for the last comparison). For each
-environment id at the default 10 Hz control / 0.05 s physics step (2 sub-steps per control step):
+One process. For each environment id at the default 10 Hz control / 0.05 s physics step (2 physics sub-steps
+per control step), random actions drawn in advance, evaluation sea 4 (coastal SS4, head seas, fixed seed):
 
-* env steps/s, unwrapped env and ``gym.make`` (with Gymnasium's checker/order wrappers), random actions
-  drawn in advance, in a coastal SS4 evaluation sea — median of ``--repeats`` runs of ``--steps`` steps;
-* the simulator alone (``Simulator.advance_steps(2)`` per control step, the same sea), for the overhead;
-* reset time (µs): ``env.reset()`` (new sea: ``Simulator.set_sea`` + ``reset``) and ``Simulator.reset()``;
-* vector env: ``--num-envs`` copies in the ``vector_entry_point`` env, and SB3 ``DummyVecEnv`` (via
-  ``make_vec_env``) for comparison — total env-steps/s, ``--vector-steps`` steps of every copy per run.
+* single env steps/s, unwrapped and through ``gym.make`` (Gymnasium's checker/order wrappers) — median of
+  ``--repeats`` runs of ``--steps`` steps, by process CPU time (min–max and the wall-clock median too);
+* the compiled physics alone: the batch kernel for one copy with the same commands, no Python around it;
+* reset time: ``env.reset(seed=i)`` with a new random sea each time (sea synthesis, ``Simulator.reset``,
+  the first tow-point block, the first observation) — median of 200;
+* the batched vector env (``gym.make_vec(..., vectorization_mode="vector_entry_point")``, one numba call per
+  step for all copies) for N = ``--sizes``: serial loop over copies (CPU time), and with ``parallel=True``
+  (``prange`` over ``--threads`` numba threads; wall-clock time, since CPU time adds up the threads);
+* for comparison, Python loops over N single envs: Gymnasium ``SyncVectorEnv`` (``vectorization_mode="sync"``)
+  and SB3 ``DummyVecEnv`` (``make_vec_env``), and the SB3 adapter ``TowSB3VecEnv`` over the batched env.
 
-Runs are long enough to amortise the per-episode costs the way real episodes do: a reset (new sea)
-costs ~0.3 ms, and the simulator evaluates the vessel motion in blocks of 2048 physics steps (~100 s).
-
-    python scripts/bench_env.py                  # about a minute
-    python scripts/bench_env.py --steps 1000 --repeats 3
+    python scripts/bench_env.py                                  # about two minutes
+    python scripts/bench_env.py --steps 1000 --repeats 3 --sizes 1 8
 """
 from __future__ import annotations
 
@@ -24,17 +25,17 @@ import platform
 import statistics
 import time
 
-# one core: keep BLAS/OpenMP/numba to a single thread (OpenBLAS would otherwise spin a second thread in
-# the vessel-motion matrix products, which doubles the CPU time without helping)
-for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+# BLAS/OpenMP single-threaded (OpenBLAS would spin a second thread in small matrix products); numba may use
+# --threads threads, but only the prange variant uses more than one
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
+os.environ.setdefault("NUMBA_NUM_THREADS", str(os.cpu_count() or 1))
 
 import numpy as np  # noqa: E402
 
 
-def _median_rate(fn, n, repeats):
-    """(median, min, max) of n / time over ``repeats`` runs, by process CPU time (robust to other load
-    on a shared machine), plus the median by wall-clock time."""
+def _rate(fn, n, repeats):
+    """(median, min, max) of n / CPU time over ``repeats`` runs, and the median of n / wall time."""
     cpu, wall = [], []
     for _ in range(repeats):
         c0, w0 = time.process_time(), time.perf_counter()
@@ -52,30 +53,28 @@ def bench_single(env_id, steps, repeats):
 
     def run(e):
         def f():
-            e.reset(seed=0, options={"eval_index": 4})           # coastal SS4, head seas, fixed seed
+            e.reset(seed=0, options={"eval_index": 4})
             for a in acts:
                 e.step(a)
         return f
 
-    run(env)()                                                     # warm-up (numba, caches)
-    out = {"unwrapped": _median_rate(run(env), steps, repeats), "gym.make": _median_rate(run(made), steps, repeats)}
-    sim = env.sim
+    run(env)()                                                     # warm-up (numba cache load, caches)
+    out = {"unwrapped": _rate(run(env), steps, repeats), "gym.make": _rate(run(made), steps, repeats)}
+    st = env._rows.stepper
 
-    def sim_only():
+    def kernel_only():
         env.reset(seed=0, options={"eval_index": 4})
         for _ in range(steps):
-            sim.advance_steps(env.substeps)
-    out["simulator only"] = _median_rate(sim_only, steps, repeats)
-    # reset times
-    n = 200
+            st.step(env.substeps, env.ACT_KIND)
+    out["kernel"] = _rate(kernel_only, steps, repeats)
     ts = []
-    for i in range(n):
+    for i in range(200):
         t0 = time.process_time()
         env.reset(seed=i)
         ts.append(time.process_time() - t0)
-    out["reset_env_us"] = statistics.median(ts) * 1e6
+    out["reset_ms"] = statistics.median(ts) * 1e3
     ts = []
-    for i in range(n):
+    for i in range(200):
         env.sim.advance_steps(1)
         t0 = time.perf_counter()
         env.sim.reset()
@@ -85,9 +84,7 @@ def bench_single(env_id, steps, repeats):
     return out
 
 
-def bench_vector(env_id, num_envs, steps, repeats):
-    import gymnasium as gym
-    venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point")
+def _vec_rate(venv, steps, repeats, wall=False):
     acts = np.random.default_rng(0).uniform(-1, 1, (steps,) + venv.action_space.shape).astype(np.float32)
 
     def f():
@@ -95,55 +92,99 @@ def bench_vector(env_id, num_envs, steps, repeats):
         for a in acts:
             venv.step(a)
     f()
-    res = {"vector_entry_point": _median_rate(f, steps * num_envs, repeats)}
+    r = _rate(f, steps * venv.num_envs, repeats)
+    return (r[3], r[3], r[3], r[3]) if wall else r
+
+
+def bench_vector(env_id, sizes, steps, repeats, threads):
+    import gymnasium as gym
+    import numba
+    res = {}
+    for n in sizes:
+        venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", batch_infos=True)
+        res[("batched", n)] = _vec_rate(venv, steps, repeats)
+        venv.close()
+        if threads > 1:
+            numba.set_num_threads(threads)
+            venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", parallel=True)
+            res[("prange", n)] = _vec_rate(venv, steps, repeats, wall=True)
+            venv.close()
+            numba.set_num_threads(1)
+    return res
+
+
+def bench_loops(env_id, n, steps, repeats):
+    import gymnasium as gym
+    res = {}
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync")
+    res["SyncVectorEnv"] = _vec_rate(venv, steps, repeats)
     venv.close()
     try:
         from stable_baselines3.common.env_util import make_vec_env
+        from towenv.envs.sb3 import TowSB3VecEnv
     except ImportError:
         return res
-    ve = make_vec_env(env_id, n_envs=num_envs, seed=0)
+    for name, make in (("SB3 DummyVecEnv", lambda: make_vec_env(env_id, n_envs=n, seed=0)),
+                       ("SB3 TowSB3VecEnv (batched)", lambda: TowSB3VecEnv(env_id, n, seed=0))):
+        ve = make()
+        acts = np.random.default_rng(0).uniform(-1, 1, (steps, n) + ve.action_space.shape).astype(np.float32)
 
-    def g():
-        ve.reset()
-        for a in acts:
-            ve.step(a)
-    g()
-    res["SB3 DummyVecEnv"] = _median_rate(g, steps * num_envs, repeats)
-    ve.close()
+        def g():
+            ve.reset()
+            for a in acts:
+                ve.step(a)
+        g()
+        res[name] = _rate(g, steps * n, repeats)
+        ve.close()
     return res
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--steps", type=int, default=2000, help="control steps per run (default 2000 = 200 s)")
+    ap.add_argument("--steps", type=int, default=2000, help="single-env control steps per run (default 2000)")
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--num-envs", type=int, default=8)
-    ap.add_argument("--vector-steps", type=int, default=1000,
-                    help="vector steps per run (each copy steps this many times; default 1000)")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1, 8, 32, 128], help="vector-env sizes N")
+    ap.add_argument("--vector-steps", type=int, default=200, help="vector steps per run (default 200)")
+    ap.add_argument("--loop-envs", type=int, default=8, help="N of the Python-loop comparisons (default 8)")
+    ap.add_argument("--threads", type=int, default=os.cpu_count() or 1, help="numba threads of the prange runs")
     args = ap.parse_args(argv)
+    import numba
     import towenv.envs
+    numba.set_num_threads(1)
     print(f"# towenv environment benchmark — {platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} cores, Python {platform.python_version()}, one process")
-    print(f"# 10 Hz control, dt = 0.05 s (2 physics sub-steps), {args.steps} steps per run, median of "
-          f"{args.repeats} runs by process CPU time (min–max, and the wall-clock median, in brackets); "
-          f"load average at start {os.getloadavg()[0]:.2f}\n")
-    rows = []
-    for env_id in towenv.envs.ENV_IDS:
-        s = bench_single(env_id, args.steps, args.repeats)
-        v = bench_vector(env_id, args.num_envs, args.vector_steps, args.repeats)
-        rows.append((env_id, s, v))
+          f"{os.cpu_count()} cores, Python {platform.python_version()}, numba {numba.__version__}, one process")
+    print(f"# 10 Hz control, dt = 0.05 s (2 physics sub-steps), coastal SS4 sea, random actions; median of "
+          f"{args.repeats} runs by process CPU time (min–max; wall-clock median); load average at start "
+          f"{os.getloadavg()[0]:.2f}\n")
     fmt = lambda r: f"{r[0]:,.0f} ({r[1]:,.0f}–{r[2]:,.0f}; wall {r[3]:,.0f})"   # noqa: E731
-    print("| environment | env steps/s (unwrapped) | env steps/s (gym.make) | simulator only | "
-          "reset env (µs) | Simulator.reset (µs) |")
+    singles, vecs, loops = {}, {}, {}
+    for env_id in towenv.envs.ENV_IDS:
+        singles[env_id] = bench_single(env_id, args.steps, args.repeats)
+        vecs[env_id] = bench_vector(env_id, args.sizes, args.vector_steps, max(3, args.repeats // 2), args.threads)
+        loops[env_id] = bench_loops(env_id, args.loop_envs, args.vector_steps, max(3, args.repeats // 2))
+    print("## Single environment (env steps/s; one core)\n")
+    print("| environment | unwrapped | gym.make | compiled step alone (kernel + gather) | reset (ms) | "
+          "Simulator.reset (µs) |")
     print("|---|---|---|---|---|---|")
-    for env_id, s, _ in rows:
-        print(f"| {env_id} | {fmt(s['unwrapped'])} | {fmt(s['gym.make'])} | {fmt(s['simulator only'])} | "
-              f"{s['reset_env_us']:,.0f} | {s['reset_sim_us']:.1f} |")
-    print(f"\n| environment | vector env ×{args.num_envs} (env-steps/s) | SB3 DummyVecEnv ×{args.num_envs} |")
-    print("|---|---|---|")
-    for env_id, _, v in rows:
-        sb3 = fmt(v["SB3 DummyVecEnv"]) if "SB3 DummyVecEnv" in v else "n/a"
-        print(f"| {env_id} | {fmt(v['vector_entry_point'])} | {sb3} |")
+    for env_id, s in singles.items():
+        print(f"| {env_id} | {fmt(s['unwrapped'])} | {fmt(s['gym.make'])} | {fmt(s['kernel'])} | "
+              f"{s['reset_ms']:.2f} | {s['reset_sim_us']:.1f} |")
+    print("\n## Batched vector env, `vector_entry_point` (total env-steps/s)\n")
+    heads = [f"N = {n}" for n in args.sizes]
+    print("| environment | mode | " + " | ".join(heads) + " |")
+    print("|---|---|" + "---|" * len(heads))
+    for env_id, v in vecs.items():
+        print(f"| {env_id} | serial (1 core, CPU time) | " + " | ".join(fmt(v[("batched", n)]) for n in args.sizes)
+              + " |")
+        if any(k[0] == "prange" for k in v):
+            print(f"| {env_id} | prange, {args.threads} threads (wall clock) | "
+                  + " | ".join(f"{v[('prange', n)][0]:,.0f}" for n in args.sizes) + " |")
+    print(f"\n## Python loops over N = {args.loop_envs} single envs, for comparison (total env-steps/s)\n")
+    names = list(next(iter(loops.values())))
+    print("| environment | " + " | ".join(names) + " |")
+    print("|---|" + "---|" * len(names))
+    for env_id, lp in loops.items():
+        print(f"| {env_id} | " + " | ".join(fmt(lp[k]) if k in lp else "n/a" for k in names) + " |")
 
 
 if __name__ == "__main__":

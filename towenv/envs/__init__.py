@@ -7,7 +7,9 @@ notebook reloads and subprocess workers are safe):
 * ``towenv/WinchPayout-v0`` — :class:`~towenv.envs.winch.WinchPayoutEnv`
 
 with string entry points (the environment modules are imported only by ``gym.make``) and
-``vector_entry_point`` = the batched :mod:`towenv.envs.vector` classes. No ``max_episode_steps`` is
+``vector_entry_point`` = the batched :mod:`towenv.envs.vector` classes (all copies stepped by one compiled
+call; ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``). The stable-baselines3
+adapter is :class:`towenv.envs.sb3.TowSB3VecEnv`. No ``max_episode_steps`` is
 registered: the environments truncate themselves at ``episode_seconds`` (default 300 s = 3000 steps).
 """
 from __future__ import annotations
@@ -29,6 +31,7 @@ for _id, _ep, _vep in _ENVS:
 _LAZY = {
     "TowEnv": ".base", "CompensatorGainsEnv": ".compensator", "WinchPayoutEnv": ".winch",
     "TowVectorEnv": ".vector", "CompensatorGainsVectorEnv": ".vector", "WinchPayoutVectorEnv": ".vector",
+    "TowSB3VecEnv": ".sb3",
     "Observer": ".pieces", "CHANNELS": ".pieces", "RandomCodeSeas": ".pieces", "FixedSeas": ".pieces",
     "HeavePitchReward": ".pieces", "HeaveOnlyReward": ".pieces", "default_eval_sea_states": ".pieces",
 }

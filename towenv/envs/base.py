@@ -1,9 +1,11 @@
 """``TowEnv``: the Gymnasium base environment around one :class:`towenv.Simulator` per configuration.
 
-The physics core knows nothing about Gymnasium; this module only calls the public ``Simulator`` API
-(``set_sea``/``reset``/``advance_steps``/``body_state``/``tensions``/``top_tension``/``compensator_state``/
-``set_compensator``/``winch_state``/``set_winch``/``line_state``) plus the prescribed tow-point history
-``sim.hist_r[:, sim.system.top_node]`` for the IMU channels (see ``docs/environments.md``).
+The physics core knows nothing about Gymnasium. A step runs through :class:`towenv.core.batch.BatchStepper`
+(one compiled call: actuator command, all physics sub-steps of ``kernels.advance``, measurement row) — the
+same code as the batched vector environment (:mod:`towenv.envs.vector`), here with one row; the episode's
+reference values, previous action and measurement live in that row (:class:`EnvRows`). Reset uses the public
+``Simulator`` API (``set_sea``/``reset``/``body_state``/``top_tension``/``compensator_state``/``winch_state``).
+The IMU channels are differences of the prescribed tow-point history ``sim.hist_r[:, top_node]``.
 
 Control: every ``step`` applies the action once and advances ``substeps = round(1/(control_hz·dt))``
 physics steps of ``dt`` (action repetition = sub-stepping); ``env.dt = dt·substeps`` is the control period.
@@ -17,11 +19,12 @@ from typing import Any, Mapping, Sequence
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from numba import njit
 
-from ..errors import SimulationDivergence
-from .pieces import FixedSeas, HeavePitchReward, Observer, RandomCodeSeas, default_eval_sea_states
+from ..core import batch as BT
+from .pieces import HeavePitchReward, Observer, RandomCodeSeas, default_eval_sea_states
 
-__all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD"]
+__all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD", "EnvRows"]
 
 #: ASSUMED breaking loads (N) of the default scene's cables (neither the thesis nor the scene gives
 #: them): primary = 0.68-inch double-armoured electro-mechanical cable (Hover et al. 1994's cable class),
@@ -145,14 +148,41 @@ class TowEnv(gym.Env):
         self._wants_preview = bool(getattr(self.observer, "wants_preview", False))
         self.action_space = spaces.Box(-1.0, 1.0, (self.ACTION_DIM,), np.float32)
         self.observation_space = spaces.Box(self.observer.low, self.observer.high, dtype=np.float32)
-        self._steps = 0
-        self._prev_action = np.zeros(self.ACTION_DIM)
-        self._z_ref = 0.0
-        self._T_ref = 1.0
         self._sea = None
         self._tension_cache = (None, None)
         self._viewer = None
-        self._last_m: dict | None = None
+        self._rows = EnvRows(1, self.ACTION_DIM)       # the vector env re-points this at its shared rows
+        self._rows.envs[0] = self
+        self._row = 0
+        self._install_row()
+
+    def _install_row(self) -> None:
+        """Install the current simulator in this env's row of the batch stepper (as it is: a new env's
+        simulator is at its initial state)."""
+        self._rows.stepper.refs[self._row, BT.R_MAXSTEPS] = self.max_steps
+        self._rows.stepper.set_copy(self._row, self.sim, self.body, self._inv_seg)
+
+    # ------------------------------------------------------------------ per-episode state (in the rows)
+    @property
+    def _steps(self) -> int:
+        return int(self._rows.stepper.refs[self._row, BT.R_STEPS])
+
+    @property
+    def _prev_action(self) -> np.ndarray:
+        return self._rows.prev_action[self._row].copy()
+
+    @property
+    def _z_ref(self) -> float:
+        return float(self._rows.stepper.refs[self._row, BT.R_ZREF])
+
+    @property
+    def _T_ref(self) -> float:
+        return float(self._rows.stepper.refs[self._row, BT.R_TREF])
+
+    @property
+    def _last_m(self) -> dict:
+        """The last measurement as a dict (keys of :data:`~towenv.envs.pieces.MEASUREMENTS`)."""
+        return self._row_dict(self._rows.stepper.M[self._row], self._rows.prev_action[self._row])
 
     # ------------------------------------------------------------------ subclass hooks
     def _prepare_scene(self, scene):
@@ -182,18 +212,24 @@ class TowEnv(gym.Env):
     def _line_names(sim):
         return [ln.name for ln in sim.scene.lines]
 
-    def _apply_action(self, a: np.ndarray) -> None:
-        raise NotImplementedError
+    #: what the command columns mean (``towenv.core.batch.ACT_*``)
+    ACT_KIND = BT.ACT_NONE
+    #: measurement columns that belong to the actuator (reported in ``_last_m``)
+    ACTUATOR_KEYS: tuple[str, ...] = ()
+
+    def _commands(self, A: np.ndarray, rows: np.ndarray, U: np.ndarray, amap: np.ndarray) -> None:
+        """Write the actuator commands of clipped actions ``A[rows]`` into ``U[rows]`` (vectorised;
+        ``amap[rows]`` holds each copy's action-map parameters). Must first clean ``A[rows]`` in place:
+        NaN -> 0, clip to [-1, 1]."""
+        _clean_actions(A, rows)
 
     def _reset_action(self) -> np.ndarray:
         """The action equivalent of the actuator's state after reset (reported as ``last_action``)."""
         return np.zeros(self.ACTION_DIM)
 
-    def _measure_actuator(self, m: dict, action: np.ndarray) -> None:
-        """Add the actuator's measurements (and ``effort``, ``end_stop_hits``) to ``m``."""
-
-    def _actuator_reset(self) -> None:
-        """Per-episode actuator bookkeeping after ``sim.reset()``."""
+    def _actuator_refs(self, refs: np.ndarray, amap: np.ndarray) -> None:
+        """Per-episode actuator reference values of this copy (``refs``: its row of ``BT.R_*``; ``amap``:
+        its row of action-map parameters used by :meth:`_commands`)."""
 
     # ------------------------------------------------------------------ configuration
     def _get_sim(self, speed, length):
@@ -234,13 +270,7 @@ class TowEnv(gym.Env):
         sim.set_sea(sea, int(wseed))
         sim.reset()
         self._sea = (sea, int(wseed))
-        self._steps = 0
-        self._z_ref = float(sim.body_state(self.body)["position"][2])
-        self._T_ref = max(float(sim.top_tension), 1e-9)
-        self._actuator_reset()
-        self._prev_action = self._reset_action()
-        m = self._measure(self._prev_action)
-        obs = self.observer.reset(m, rng)
+        obs = self._start_episode(sim, rng)
         info = {"sea_state": {"hs": float(sea.hs), "tp": float(sea.tp), "heading_deg": float(sea.heading_deg)},
                 "sea_seed": int(wseed), "vessel_speed": float(sim.path.initial_speed), "t": 0.0}
         if self.cable_line in self._line_names(sim):
@@ -249,47 +279,51 @@ class TowEnv(gym.Env):
             self.render()
         return obs, info
 
+    def _start_episode(self, sim, rng) -> np.ndarray:
+        """Install ``sim`` (just reset) in this env's row of the batch stepper, set the row's reference
+        values and return the first observation."""
+        rows, i = self._rows, self._row
+        st = rows.stepper
+        inv_seg, top_inv, _ = self._tension_layout(sim)
+        ref = st.refs[i]
+        ref[:] = 0.0
+        ref[BT.R_ZREF] = float(sim.body_state(self.body)["position"][2])
+        ref[BT.R_TREF] = max(float(sim.top_tension), 1e-9)
+        ref[BT.R_TOPINV] = top_inv
+        ref[BT.R_HALF_STROKE] = ref[BT.R_VMAX] = 1.0
+        ref[BT.R_MAXSTEPS] = self.max_steps
+        self._actuator_refs(ref, rows.amap[i])
+        st.set_copy(i, sim, self.body, self._inv_seg)
+        rows.prev_action[i] = self._reset_action()
+        M = st.measure(i)
+        P = self._preview_rows([i]) if self._wants_preview else None
+        obs_fn = self.observer
+        if hasattr(obs_fn, "measure_rows"):
+            first = obs_fn.measure_rows(st.M, rows.prev_action, np.array([i]), [rng], P)[0]
+            return obs_fn.start(first)
+        return obs_fn.reset(self._row_dict(M, rows.prev_action[i], P[0] if P is not None else None), rng)
+
     def step(self, action):
-        a = np.array(action, dtype=float).reshape(self.ACTION_DIM)      # a copy: the caller's array is kept
-        if not np.isfinite(a).all():
-            a = np.nan_to_num(a, nan=0.0)
-        np.minimum(np.maximum(a, -1.0, out=a), 1.0, out=a)
-        sim = self.sim
-        self._apply_action(a)
-        failure = None
-        try:
-            sim.advance_steps(self.substeps)
-        except SimulationDivergence as exc:
-            failure = exc
-        self._steps += 1
-        m = self._measure(a)
-        obs = self.observer(m, self.np_random)
-        reward, comps = self.reward_fn(m, a, self._prev_action)
-        self._prev_action = a
-        terminated, reason = self._terminal(m)
-        if terminated:
-            tc = float(self.reward_fn.terminal_cost(self.max_steps - self._steps))
-            comps["terminal"] = tc
-            reward -= tc
-        truncated = failure is not None or self._steps >= self.max_steps
-        info = {"t": float(m["t"]), "reward_components": comps, "fish_heave": float(m["fish_heave"]),
-                "fish_pitch": float(m["fish_pitch"]), "top_tension": float(m["top_tension"]),
-                "end_stop_hits": int(m.get("end_stop_hits", 0)), "slack": bool(m["min_tension"] <= self._slack())}
-        if terminated:
-            info["termination"] = reason
-        if failure is not None:
-            info["failure"] = (f"numerical failure at t = {failure.time:.4g} s in {failure.element}: "
-                               f"{failure.cause}")
-            info["solver_failure"] = True
-        if not math.isfinite(reward):          # cannot happen by construction; belt and braces
-            reward = -1e6
+        a = np.array(action, dtype=float).reshape(1, self.ACTION_DIM)   # a copy: the caller's array is kept
+        rows = self._rows
+        i = self._row
+        A = rows.actions
+        A[i] = a[0]
+        res = step_copies([self], rows, np.array([i]))
+        obs, reward, terminated, truncated = res.obs[0], float(res.rewards[0]), bool(res.terminated[0]), \
+            bool(res.truncated[0])
+        info = res.info(0)
         if self.render_mode == "human":
             self.render()
-        return obs, float(reward), bool(terminated), bool(truncated), info
+        return obs, reward, terminated, truncated, info
 
     # ------------------------------------------------------------------ measurement
     def _slack(self):
         return getattr(self.reward_fn, "slack_tension", 1.0)
+
+    def _inv_seg(self, sim):
+        """1/breaking load of every segment of ``sim``'s current system (re-evaluated after a remesh)."""
+        return self._tension_layout(sim)[0]
 
     def _tension_layout(self, sim):
         """(per-segment 1/breaking load, 1/breaking load at the tow point, [(line, segments, 1/load)]) for
@@ -314,40 +348,30 @@ class TowEnv(gym.Env):
         self._tension_cache = (system, lay)
         return lay
 
-    def _measure(self, action) -> dict:
-        sim = self.sim
-        dt = sim.dt
-        hr = sim.hist_r
-        top = sim.system.top_node
-        z0, z1, z2 = float(hr[0, top, 2]), float(hr[1, top, 2]), float(hr[2, top, 2])
-        b = sim.body_state(self.body)
-        T = sim.tensions
-        t_top = sim.top_tension
-        inv_seg, top_inv, _ = self._tension_layout(sim)
-        ratio = max(t_top * top_inv, float((T * inv_seg).max()))
-        pos, vel = b["position"], b["velocity"]
-        z = float(pos[2])
-        m = {
-            "t": sim.t,
-            "tow_vel_z": (3.0 * z0 - 4.0 * z1 + z2) / (2.0 * dt),
-            "tow_acc_z": (z0 - 2.0 * z1 + z2) / (dt * dt),
-            "top_tension": t_top,
-            "top_tension_ratio": t_top / self._T_ref,
-            "fish_heave": z - self._z_ref,
-            "fish_depth": -z,
-            "fish_pitch": float(b["euler"][1]),
-            "fish_heave_rate": float(vel[2]),
-            "fish_pitch_rate": float(b["omega"][1]),
-            "min_tension": float(T.min()),
-            "tension_ratio": ratio,
-            "last_action": action,
-            "time_left": 1.0 - self._steps / self.max_steps,
-        }
-        self._measure_actuator(m, action)
-        if self._wants_preview:
-            m["wave_preview"] = self._wave_preview(sim)
-        self._last_m = m
+    _BASE_KEYS = ("t", "tow_vel_z", "tow_acc_z", "top_tension", "top_tension_ratio", "fish_heave", "fish_depth",
+                  "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "min_tension", "tension_ratio", "time_left")
+
+    def _row_dict(self, row, action, preview=None) -> dict:
+        """A measurement row as the dict ``m`` of :data:`~towenv.envs.pieces.MEASUREMENTS` (for custom
+        observers / reward functions and the renderer)."""
+        m = {k: float(row[BT.COL[k]]) for k in self._BASE_KEYS + self.ACTUATOR_KEYS}
+        m["last_action"] = np.array(action, float)
+        if preview is not None:
+            m["wave_preview"] = np.asarray(preview, float)
+        elif self._wants_preview:
+            m["wave_preview"] = self._wave_preview(self.sim)
         return m
+
+    def _preview_rows(self, idx):
+        """(len(rows) of the stepper, n_distances) wave-preview array with rows ``idx`` filled."""
+        st = self._rows.stepper
+        P = getattr(self._rows, "preview", None)
+        nd = len(self.observer.preview_distances)
+        if P is None or P.shape != (st.num_copies, nd):
+            P = self._rows.preview = np.zeros((st.num_copies, nd))
+        for i in idx:
+            P[i] = self._rows.envs_of(i, self)._wave_preview(st.sims[i])
+        return P
 
     def _wave_preview(self, sim):
         """Wave elevation now at ``preview_distances`` ahead of the tow point along the ship's heading
@@ -365,17 +389,16 @@ class TowEnv(gym.Env):
         ramp = float(sim.path.ramp(np.array([t]))[0])
         return ramp * np.asarray(sim.wave.elevation(np.full(d.size, t), xr, yr), float).reshape(d.size)
 
-    def _terminal(self, m):
-        if m["tension_ratio"] >= 1.0:
+    def _terminal_reason(self, row) -> str:
+        """Why a copy whose measurement row met a termination condition terminated."""
+        if row[BT.M_T_RATIO] >= 1.0:
             _, top_inv, lines = self._tension_layout(self.sim)
             T = self.sim.tensions
             which = [n for n, segs, k in lines if segs.size and float(T[segs].max()) * k >= 1.0]
             if self.sim.top_tension * top_inv >= 1.0:
                 which.append("tow point")
-            return True, f"cable_parted: tension above the breaking load ({', '.join(dict.fromkeys(which))})"
-        if self.floor_depth is not None and m["fish_depth"] > self.floor_depth:
-            return True, f"{self.body}_below_floor: depth {m['fish_depth']:.1f} m > {self.floor_depth:g} m"
-        return False, None
+            return f"cable_parted: tension above the breaking load ({', '.join(dict.fromkeys(which))})"
+        return f"{self.body}_below_floor: depth {row[BT.M_DEPTH]:.1f} m > {self.floor_depth:g} m"
 
     # ------------------------------------------------------------------ rendering / pickling
     def render(self):
@@ -409,3 +432,143 @@ class TowEnv(gym.Env):
     @property
     def steps(self) -> int:
         return self._steps
+
+
+# =====================================================================================================
+# batched stepping shared by TowEnv (one row) and the vector environments (B rows)
+# =====================================================================================================
+class EnvRows:
+    """Per-copy arrays of ``n`` environment copies stepped together: the :class:`~towenv.core.batch.BatchStepper`
+    (simulators, reference values ``refs``, measurement rows ``M``, commands ``U``), the actions, the
+    previous actions, per-copy action maps ``amap`` and the environment object of each row (``envs``)."""
+
+    def __init__(self, n: int, action_dim: int, parallel: bool = False):
+        self.stepper = BT.BatchStepper(n, parallel=parallel)
+        self.actions = np.zeros((n, action_dim))
+        self.prev_action = np.zeros((n, action_dim))
+        self.amap = np.zeros((n, 8))
+        self.preview = None
+        self.envs: list = [None] * n
+        self._all = np.ones(n, bool)
+
+    def envs_of(self, i, default):
+        e = self.envs[i]
+        return default if e is None else e
+
+
+class StepResult:
+    """Outcome of :func:`step_copies` for rows ``idx`` (arrays indexed by position k in ``idx``)."""
+
+    __slots__ = ("envs", "rows", "idx", "obs", "rewards", "terminated", "truncated", "comps", "names",
+                 "failures", "reasons", "terminal_costs")
+
+    def info(self, k: int) -> dict:
+        """The single-environment ``info`` dict of row position k."""
+        e = self.envs[k]
+        i = self.idx[k]
+        M = self.rows.stepper.M[i]
+        comps = dict(zip(self.names, self.comps[k].tolist())) if self.names is not None else self.comps[k]
+        if k in self.terminal_costs:
+            comps["terminal"] = self.terminal_costs[k]
+        info = {"t": float(M[BT.M_T]), "reward_components": comps, "fish_heave": float(M[BT.M_HEAVE]),
+                "fish_pitch": float(M[BT.M_PITCH]), "top_tension": float(M[BT.M_TOP_T]),
+                "end_stop_hits": int(M[BT.M_HITS]), "slack": bool(M[BT.M_MIN_T] <= e._slack())}
+        if k in self.reasons:
+            info["termination"] = self.reasons[k]
+        f = self.failures.get(int(i))
+        if f is not None:
+            info["failure"] = (f"numerical failure at t = {f.time:.4g} s in {f.element}: {f.cause}")
+            info["solver_failure"] = True
+        return info
+
+
+def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
+    """Advance the copies ``envs`` (rows ``idx`` of ``rows``; all of one class and configuration) by one
+    control step with the actions in ``rows.actions[idx]``: actions cleaned and mapped to commands, ONE
+    compiled call for all physics sub-steps and measurements, then observations, rewards, termination
+    and truncation (vectorised when the observer / reward function offer ``measure_rows`` / ``batch``)."""
+    e0 = envs[0]
+    st = rows.stepper
+    A = rows.actions
+    e0._commands(A, idx, st.U, rows.amap)          # also cleans A[idx] (NaN -> 0, clip to [-1, 1])
+    refs = st.refs                                  # the kernel adds 1 to refs[idx, R_STEPS]
+    if len(idx) == st.num_copies:
+        act = None
+    else:
+        act = np.zeros(st.num_copies, bool)
+        act[idx] = True
+    failures = st.step(e0.substeps, e0.ACT_KIND, act)
+    M = st.M
+    P = e0._preview_rows(idx) if e0._wants_preview else None
+    obs_fn = e0.observer
+    if hasattr(obs_fn, "measure_rows"):
+        rngs = [e.np_random for e in envs] if obs_fn._noisy else None
+        O = obs_fn.measure_rows(M, A, idx, rngs, P)
+        if obs_fn.delay:
+            for k, e in enumerate(envs):
+                O[k] = e.observer.push(O[k])
+    else:
+        O = np.stack([e.observer(e._row_dict(M[i], A[i], None if P is None else P[i]), e.np_random)
+                      for e, i in zip(envs, idx)])
+    rew_fn = e0.reward_fn
+    if hasattr(rew_fn, "batch"):
+        R, C = rew_fn.batch(M, A, rows.prev_action, idx)
+        names = rew_fn.COMPONENTS
+    else:
+        R = np.empty(len(idx))
+        C = []
+        for k, (e, i) in enumerate(zip(envs, idx)):
+            r, c = e.reward_fn(e._row_dict(M[i], A[i], None if P is None else P[i]), A[i].copy(),
+                               rows.prev_action[i].copy())
+            R[k] = r
+            C.append(c)
+        names = None
+    term = np.empty(len(idx), bool)
+    trunc = np.empty(len(idx), bool)
+    fd = e0.floor_depth
+    nterm = _post_rows(M, refs, A, rows.prev_action, idx, -1.0 if fd is None else float(fd), fd is not None, R,
+                       term, trunc)
+    reasons, tcs = {}, {}
+    if nterm:
+        for k in np.flatnonzero(term):
+            e = envs[k]
+            reasons[int(k)] = e._terminal_reason(M[idx[k]])
+            tc = float(e.reward_fn.terminal_cost(e.max_steps - int(refs[idx[k], BT.R_STEPS])))
+            tcs[int(k)] = tc
+            R[k] -= tc
+            if not math.isfinite(R[k]):
+                R[k] = -1e6
+    if failures:
+        for k, i in enumerate(idx):
+            if int(i) in failures:
+                trunc[k] = True
+    res = StepResult()
+    res.envs, res.rows, res.idx, res.obs, res.rewards = envs, rows, idx, O, R
+    res.terminated, res.truncated, res.comps, res.names = term, trunc, C, names
+    res.failures, res.reasons, res.terminal_costs = failures, reasons, tcs
+    return res
+
+
+@njit(cache=True)
+def _post_rows(M, refs, A, PA, idx, floor, has_floor, R, term, trunc):
+    """Termination / time-limit flags of rows idx, non-finite rewards -> -1e6, previous action <- action."""
+    nterm = 0
+    for k in range(idx.shape[0]):
+        b = idx[k]
+        t = M[b, BT.M_T_RATIO] >= 1.0 or (has_floor and M[b, BT.M_DEPTH] > floor)
+        term[k] = t
+        nterm += t
+        trunc[k] = refs[b, BT.R_STEPS] >= refs[b, BT.R_MAXSTEPS]
+        if not math.isfinite(R[k]):           # cannot happen by construction; belt and braces
+            R[k] = -1e6
+        for j in range(A.shape[1]):
+            PA[b, j] = A[b, j]
+    return nterm
+
+
+def _clean_actions(A, idx):
+    a = A[idx]
+    if not np.isfinite(a).all():
+        a = np.nan_to_num(a, nan=0.0)
+    np.minimum(np.maximum(a, -1.0, out=a), 1.0, out=a)
+    A[idx] = a

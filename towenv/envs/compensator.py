@@ -17,7 +17,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
+from ..core import batch as BT
 from .base import TowEnv
 
 __all__ = ["CompensatorGainsEnv"]
@@ -33,6 +35,8 @@ class CompensatorGainsEnv(TowEnv):
     DEFAULT_OBSERVATIONS = ("tow_vel_z", "tow_acc_z", "top_tension", "comp_stroke", "comp_stroke_vel",
                             "fish_heave", "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "last_action")
     ACTION_DIM = 2
+    ACT_KIND = BT.ACT_COMP_GAINS
+    ACTUATOR_KEYS = ("comp_stroke", "comp_stroke_vel", "end_stop_hits", "comp_stiffness", "comp_damping", "effort")
 
     def __init__(self, *, stiffness_floor: float | None = None, damping_floor: float | None = None, **kwargs):
         self.stiffness_floor = stiffness_floor
@@ -87,25 +91,44 @@ class CompensatorGainsEnv(TowEnv):
         """Inverse of :meth:`gains` (clipped to [-1, 1])."""
         return np.array([self._to_action(stiffness, self._k_map), self._to_action(damping, self._b_map)])
 
-    def _apply_action(self, a):
-        k, b = self.gains(a)
-        self.sim.set_compensator(stiffness=k, damping=b)
+    @property
+    def _hits(self) -> int:
+        """Compensator end-stop hits counted so far in the episode."""
+        return int(self._rows.stepper.refs[self._row, BT.R_HITS])
 
-    def _actuator_reset(self):
+    def _commands(self, A, rows, U, amap):
+        _log_gains(A, rows, amap, U)
+
+    def _actuator_refs(self, ref, amap):
         self._check_actuator(self.sim)          # bounds are per configuration (same for all by default)
-        self._hits = 0
+        amap[0:4] = self._k_map
+        amap[4:8] = self._b_map
+        ref[BT.R_HALF_STROKE] = self._half_stroke
+        ref[BT.R_HITS] = 0.0
 
     def _reset_action(self):
         cs = self.sim.compensator_state()
         return self.action_of(cs["stiffness"], cs["damping"])
 
-    def _measure_actuator(self, m, action):
-        cs = self.sim.compensator_state()
-        hits = int(cs["hits"])
-        m["comp_stroke"] = cs["stroke"] / self._half_stroke
-        m["comp_stroke_vel"] = cs["stroke_velocity"]
-        m["end_stop_hits"] = max(0, hits - self._hits)
-        self._hits = hits
-        m["comp_stiffness"] = cs["stiffness"]
-        m["comp_damping"] = cs["damping"]
-        m["effort"] = 0.0
+
+@njit(cache=True)
+def _log_gains(A, rows, amap, U):
+    """Clean actions ``A[rows]`` in place (NaN → 0, clip to [−1, 1]) and map them to gains (the
+    arithmetic of :meth:`CompensatorGainsEnv.gains`)."""
+    for k in range(rows.shape[0]):
+        b = rows[k]
+        for d in range(2):
+            a = A[b, d]
+            if a != a:                      # NaN -> 0; ±inf -> ±1
+                a = 0.0
+            a = min(max(a, -1.0), 1.0)
+            A[b, d] = a
+            lo = amap[b, 4 * d]
+            hi = amap[b, 4 * d + 1]
+            blo = amap[b, 4 * d + 2]
+            bhi = amap[b, 4 * d + 3]
+            if hi <= lo:
+                g = lo
+            else:
+                g = lo * (hi / lo) ** (0.5 * (a + 1.0))
+            U[b, d] = min(max(g, blo), bhi)

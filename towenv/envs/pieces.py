@@ -20,7 +20,9 @@ from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
+from numba import njit
 
+from ..core.batch import COL, MEAS_COLUMNS
 from ..sea import SeaState
 from ..stats import RATE_LIMITS
 
@@ -149,6 +151,21 @@ class Observer:
         self._noisy = bool(np.any(self._std > 0))
         self.size = len(lows)
         self._plan = [(src, src not in ("last_action", "wave_preview")) for src, _, _ in self.layout]
+        # compiled row path: element k reads measurement column / action entry / preview entry src_idx[k]
+        kind, idx = [], []
+        for src, _, width in self.layout:
+            for j in range(width):
+                if src == "last_action":
+                    kind.append(1)
+                    idx.append(j)
+                elif src == "wave_preview":
+                    kind.append(2)
+                    idx.append(j)
+                else:
+                    kind.append(0)
+                    idx.append(COL[src])
+        self._src_kind = np.array(kind, np.int64)
+        self._src_idx = np.array(idx, np.int64)
         self._ring = np.zeros((self.delay + 1, self.size), np.float32)
         self._head = 0
 
@@ -173,6 +190,39 @@ class Observer:
         np.minimum(np.maximum(raw, self._lo64, out=raw), self._hi64, out=raw)
         return raw.astype(np.float32)
 
+    def measure_rows(self, M: np.ndarray, A: np.ndarray, rows: np.ndarray, rngs=None,
+                     preview: np.ndarray | None = None) -> np.ndarray:
+        """Undelayed observations (len(rows), size) float32 of measurement rows ``M[rows]`` (columns
+        :data:`~towenv.core.batch.MEAS_COLUMNS`) with actions ``A[rows]`` — the compiled, batched form of
+        :meth:`measure` (same scaling, noise, NaN handling and clipping). ``rngs[i]`` draws row i's noise."""
+        noisy = self._noisy and rngs is not None
+        if noisy:
+            noise = np.zeros((len(rows), self.size))
+            for k, rng in enumerate(rngs):
+                if rng is not None:
+                    noise[k] = rng.standard_normal(self.size)
+        else:
+            noise = _NO_NOISE
+        P = _NO_PREVIEW if preview is None else preview
+        out = np.empty((len(rows), self.size), np.float32)
+        _observe_rows(M, A, P, rows, self._src_kind, self._src_idx, self._inv_scale, self._std, noise, noisy,
+                      self._lo64, self._hi64, out)
+        return out
+
+    def push(self, obs: np.ndarray) -> np.ndarray:
+        """Push an undelayed observation into the delay ring; return the one ``delay`` steps old."""
+        if self.delay == 0:
+            return obs
+        self._head = (self._head + 1) % (self.delay + 1)
+        self._ring[self._head] = obs
+        return self._ring[(self._head + 1) % (self.delay + 1)].copy()
+
+    def start(self, obs: np.ndarray) -> np.ndarray:
+        """Fill the delay ring with the first observation of an episode."""
+        self._ring[:] = obs
+        self._head = 0
+        return obs.copy()
+
     def reset(self, m, rng) -> np.ndarray:
         first = self.measure(m, rng)
         self._ring[:] = first
@@ -187,6 +237,37 @@ class Observer:
         self._head = (self._head + 1) % (self.delay + 1)
         self._ring[self._head] = obs
         return self._ring[(self._head + 1) % (self.delay + 1)].copy()
+
+
+_NO_NOISE = np.zeros((1, 1))
+_NO_PREVIEW = np.zeros((1, 1))
+
+
+@njit(cache=True)
+def _observe_rows(M, A, P, rows, kind, idx, inv_scale, std, noise, noisy, lo, hi, out):
+    for k in range(rows.shape[0]):
+        b = rows[k]
+        for j in range(kind.shape[0]):
+            if kind[j] == 0:
+                v = M[b, idx[j]]
+            elif kind[j] == 1:
+                v = A[b, idx[j]]
+            else:
+                v = P[b, idx[j]]
+            v = v * inv_scale[j]
+            if noisy:
+                v = v + std[j] * noise[k, j]
+            if v != v:
+                v = 0.0
+            elif v > 1e30:
+                v = 1e30
+            elif v < -1e30:
+                v = -1e30
+            if v < lo[j]:
+                v = lo[j]
+            if v > hi[j]:
+                v = hi[j]
+            out[k, j] = v
 
 
 # =====================================================================================================
@@ -343,6 +424,65 @@ class HeavePitchReward(RewardFn):
 
     def terminal_cost(self, steps_left):
         return self.weights["terminal"] * (int(steps_left) + 1)
+
+    #: names of the components, in the order of the columns of :meth:`batch`'s component array
+    COMPONENTS = ("heave", "pitch", "heave_rate", "pitch_rate", "end_stop", "slack", "over_tension", "effort",
+                  "action_rate")
+
+    def batch(self, M: np.ndarray, A: np.ndarray, A_prev: np.ndarray, rows: np.ndarray):
+        """Compiled batched form of ``__call__`` for measurement rows ``M[rows]`` (columns
+        :data:`~towenv.core.batch.MEAS_COLUMNS`): ``(rewards (n,), components (n, 9))`` with the columns in
+        the order of :attr:`COMPONENTS`."""
+        wv = self.__dict__.get("_wv")
+        if wv is None:                # the weights are constructor parameters: fixed after __init__
+            wv = self._wv = np.array([self.weights[k] for k in self.COMPONENTS])
+        R = np.empty(len(rows))
+        C = np.empty((len(rows), len(self.COMPONENTS)))
+        _heave_pitch_rows(M, A, A_prev, rows, wv, self.slack_tension, self.over_tension_fraction,
+                          HEAVE_RATE_LIMIT, PITCH_RATE_LIMIT, C, R)
+        return R, C
+
+
+_MC = {n: i for i, n in enumerate(MEAS_COLUMNS)}
+_C_HEAVE, _C_PITCH = _MC["fish_heave"], _MC["fish_pitch"]
+_C_HR, _C_PR = _MC["fish_heave_rate"], _MC["fish_pitch_rate"]
+_C_HITS, _C_MINT, _C_RATIO, _C_EFF = _MC["end_stop_hits"], _MC["min_tension"], _MC["tension_ratio"], _MC["effort"]
+
+
+@njit(cache=True)
+def _heave_pitch_rows(M, A, AP, rows, w, slack, f, hrl, prl, C, R):
+    na = A.shape[1]
+    for k in range(rows.shape[0]):
+        b = rows[k]
+        hr = M[b, _C_HR] / hrl
+        pr = M[b, _C_PR] / prl
+        da2 = 0.0
+        for j in range(na):
+            d = A[b, j] - AP[b, j]
+            da2 += d * d
+        da2 = da2 / max(na, 1)
+        eff = M[b, _C_EFF]
+        h = M[b, _C_HEAVE]
+        th = M[b, _C_PITCH]
+        C[k, 0] = w[0] * (h * h)
+        C[k, 1] = w[1] * (th * th)
+        C[k, 2] = w[2] * hr * hr
+        C[k, 3] = w[3] * pr * pr
+        C[k, 4] = w[4] * M[b, _C_HITS]
+        C[k, 5] = w[5] * (1.0 if M[b, _C_MINT] <= slack else 0.0)
+        C[k, 6] = w[6] * max(0.0, (M[b, _C_RATIO] - f) / (1.0 - f))
+        C[k, 7] = w[7] * (eff * eff)
+        C[k, 8] = w[8] * da2
+        tot = 0.0
+        for j in range(9):
+            tot += C[k, j]
+        if not math.isfinite(tot):          # never hand NaN to a learner
+            tot = 0.0
+            for j in range(9):
+                if not math.isfinite(C[k, j]):
+                    C[k, j] = 1e6
+                tot += C[k, j]
+        R[k] = -tot
 
 
 class HeaveOnlyReward(HeavePitchReward):

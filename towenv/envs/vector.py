@@ -1,26 +1,38 @@
-"""Batched environments: ``N`` TowEnv copies stepped in one ``VectorEnv.step`` call.
+"""Batched environments: ``N`` TowEnv copies stepped by ONE compiled call per ``VectorEnv.step``.
 
-First version: the copies' Simulators are looped in Python inside one process (each copy's physics
-sub-steps already run in one compiled ``advance_steps`` call). This saves Gymnasium's SyncVectorEnv
-bookkeeping but not the per-copy Python overhead; **a single compiled multi-copy kernel (one numba call
-stepping all B systems, optionally with ``prange``) is future work** — it needs a batched ``advance`` in
-the simulator core.
+Each copy keeps its own :class:`~towenv.envs.base.TowEnv` object (configuration, ``np_random``, sea
+generator, observer ring buffer, simulators), but all copies share one :class:`~towenv.envs.base.EnvRows`:
+a :class:`~towenv.core.batch.BatchStepper` holding every copy's kernel arguments in a ``numba.typed.List``.
+One ``step`` maps all actions to actuator commands, advances all copies' physics sub-steps and gathers
+their measurements in one numba call (serial loop over copies, or ``prange`` with ``parallel=True``),
+then computes observations, rewards and flags vectorised over the copies. Copies that need a winch remesh
+or fail numerically are finished in Python (a failure truncates that copy with ``info["failure"]``).
+A copy's trajectory is bit-identical to a single environment's with the same seed and actions.
 
-Registered as the ``vector_entry_point`` of both ids, so
-``gymnasium.make_vec("towenv/CompensatorGains-v0", num_envs=8, vectorization_mode="vector_entry_point")``
-builds one of these. Autoreset follows Gymnasium 1.x: ``NEXT_STEP`` (default; the step after an
-episode ends returns the reset observation with reward 0 and both flags False), ``SAME_STEP`` (the reset
-observation is returned at once and the last one is in ``infos["final_obs"]``) or ``DISABLED`` (reset
-finished copies yourself with ``reset(options={"reset_mask": mask})``).
+Registered as the ``vector_entry_point`` of both ids::
+
+    gymnasium.make_vec("towenv/WinchPayout-v0", num_envs=8, vectorization_mode="vector_entry_point")
+
+Autoreset follows Gymnasium 1.x (``metadata["autoreset_mode"]``): ``NEXT_STEP`` (default; the step
+after an episode ends returns the reset observation with reward 0, both flags False, and the reset info),
+``SAME_STEP`` (the reset observation is returned at once; the last one is in ``infos["final_obs"]`` and
+its info in ``infos["final_info"]``) or ``DISABLED`` (reset finished copies yourself with
+``reset(options={"reset_mask": mask})``; stepping a finished copy raises). Seeding: ``reset(seed=s)``
+seeds copy i with ``s + i`` (or pass a list of seeds).
+
+For stable-baselines3 use :class:`towenv.envs.sb3.TowSB3VecEnv` (SB3's own ``VecEnv`` API).
 """
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..core import batch as BT
+from .base import EnvRows, step_copies
 from .compensator import CompensatorGainsEnv
 from .winch import WinchPayoutEnv
 
@@ -30,15 +42,16 @@ __all__ = ["TowVectorEnv", "CompensatorGainsVectorEnv", "WinchPayoutVectorEnv"]
 class TowVectorEnv(VectorEnv):
     """``num_envs`` copies of ``env_class(**env_kwargs)`` (every copy gets the same keywords).
 
-    ``batch_infos=False`` skips building the per-step info dict (a few µs per copy); episode-level
-    keys (``failure``, ``termination``, ``final_obs``/``final_info``) are still reported."""
+    ``batch_infos=False`` skips the per-step info arrays; episode-level keys (``failure``,
+    ``solver_failure``, ``termination``, ``final_obs``/``final_info``) are still reported.
+    ``parallel=True`` steps the copies with ``numba.prange`` over ``numba.get_num_threads()`` threads."""
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10, "autoreset_mode": AutoresetMode.NEXT_STEP}
     env_class: type | None = None
 
     def __init__(self, num_envs: int = 1, *, env_class: type | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP, render_mode: str | None = None,
-                 batch_infos: bool = True, **env_kwargs: Any):
+                 batch_infos: bool = True, parallel: bool = False, **env_kwargs: Any):
         cls = env_class or self.env_class
         if cls is None:
             raise ValueError("TowVectorEnv: give env_class (or use a subclass)")
@@ -47,24 +60,34 @@ class TowVectorEnv(VectorEnv):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"vector environments render only 'rgb_array' (got {render_mode!r})")
         self.autoreset_mode = AutoresetMode(autoreset_mode)
-        self.num_envs = int(num_envs)
-        self.envs = [cls(render_mode=render_mode, **env_kwargs) for _ in range(self.num_envs)]
+        self.num_envs = n = int(num_envs)
+        self.envs = [cls(render_mode=render_mode, **env_kwargs) for _ in range(n)]
         e0 = self.envs[0]
+        for e in self.envs[1:]:
+            if e.observer is e0.observer:       # one observation_fn object given: each copy needs its own
+                e.observer = copy.deepcopy(e0.observer)      # delay ring buffer
+        self.rows = EnvRows(n, e0.ACTION_DIM, parallel=parallel)
+        for i, e in enumerate(self.envs):
+            e._rows, e._row = self.rows, i
+            self.rows.envs[i] = e
+            e._install_row()
+        self.parallel = bool(parallel)
         self.single_observation_space = e0.observation_space
         self.single_action_space = e0.action_space
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
         self.metadata = dict(self.metadata, autoreset_mode=self.autoreset_mode,
                              render_fps=e0.metadata["render_fps"])
         self.render_mode = render_mode
         self.batch_infos = bool(batch_infos)
         self.dt = e0.dt
-        n = self.num_envs
         self._obs = np.zeros((n,) + self.single_observation_space.shape, np.float32)
         self._rew = np.zeros(n)
         self._term = np.zeros(n, bool)
         self._trunc = np.zeros(n, bool)
         self._autoreset = np.zeros(n, bool)
+        self._started = np.zeros(n, bool)
+        self._all = np.arange(n)
 
     # ------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -92,35 +115,111 @@ class TowVectorEnv(VectorEnv):
         self._term[mask] = False
         self._trunc[mask] = False
         self._autoreset[mask] = False
+        self._started[mask] = True
         return self._obs.copy(), infos
 
-    def step(self, actions):
-        actions = np.asarray(actions, dtype=np.float32).reshape((self.num_envs,) + self.single_action_space.shape)
-        infos: dict[str, Any] = {}
+    def _step_arrays(self, actions):
+        """Step every copy: returns (StepResult or None, stepped row indices, {row: reset info} of copies
+        auto-reset before stepping (NEXT_STEP), {row: (final obs, final info)} of copies auto-reset after
+        (SAME_STEP)). Fills ``self._obs/_rew/_term/_trunc``."""
+        n = self.num_envs
+        adim = self.single_action_space.shape
+        actions = np.asarray(actions, dtype=np.float32).reshape((n,) + adim)
+        if not self._started.all():
+            raise RuntimeError(f"step: reset copies {np.flatnonzero(~self._started).tolist()} first (call reset())")
         mode = self.autoreset_mode
-        for i, env in enumerate(self.envs):
-            if mode == AutoresetMode.NEXT_STEP and self._autoreset[i]:
-                self._obs[i], info = env.reset()
-                self._rew[i] = 0.0
-                self._term[i] = self._trunc[i] = False
-            else:
-                if mode == AutoresetMode.DISABLED and self._autoreset[i]:
-                    raise RuntimeError(f"sub-environment {i} finished: reset it with options={{'reset_mask': ...}}")
-                self._obs[i], self._rew[i], self._term[i], self._trunc[i], info = env.step(actions[i])
-                if mode == AutoresetMode.SAME_STEP and (self._term[i] or self._trunc[i]):
-                    infos = self._add_info(infos, {"final_obs": self._obs[i].copy(), "final_info": info}, i)
-                    self._obs[i], info = env.reset()
-            if self.batch_infos:
-                infos = self._add_info(infos, info, i)
-            else:
-                extra = {k: info[k] for k in ("failure", "termination") if k in info}
-                if extra:
-                    infos = self._add_info(infos, extra, i)
-        if mode == AutoresetMode.SAME_STEP:
+        reset_before = {}
+        if self._autoreset.any():
+            if mode == AutoresetMode.DISABLED:
+                i = int(np.flatnonzero(self._autoreset)[0])
+                raise RuntimeError(f"sub-environment {i} finished: reset it with options={{'reset_mask': ...}}")
+            if mode == AutoresetMode.NEXT_STEP:
+                for i in np.flatnonzero(self._autoreset):
+                    self._obs[i], reset_before[int(i)] = self.envs[i].reset()
+                    self._rew[i] = 0.0
+                    self._term[i] = self._trunc[i] = False
+        idx = self._all if not reset_before else np.flatnonzero(~self._autoreset)
+        res = None
+        if len(idx):
+            self.rows.actions[idx] = actions[idx]
+            res = step_copies([self.envs[i] for i in idx] if len(idx) < n else self.envs, self.rows, idx)
+            self._obs[idx] = res.obs
+            self._rew[idx] = res.rewards
+            self._term[idx] = res.terminated
+            self._trunc[idx] = res.truncated
+        final = {}
+        if mode == AutoresetMode.SAME_STEP and res is not None:
+            done = res.terminated | res.truncated
+            for k in np.flatnonzero(done):
+                i = int(idx[k])
+                final[i] = (self._obs[i].copy(), res.info(int(k)))
+                self._obs[i], _ = self.envs[i].reset()
             self._autoreset[:] = False
         else:
             self._autoreset = self._term | self._trunc
+        return res, idx, reset_before, final
+
+    def step(self, actions):
+        res, idx, reset_before, final = self._step_arrays(actions)
+        infos: dict[str, Any] = {}
+        if res is not None:
+            if self.batch_infos:
+                infos = self._batched_infos(res, idx)
+            else:
+                for k in list(res.reasons) + [k for k, i in enumerate(idx) if int(i) in res.failures]:
+                    full = res.info(int(k))
+                    extra = {key: full[key] for key in ("failure", "solver_failure", "termination") if key in full}
+                    infos = self._add_info(infos, extra, int(idx[k]))
+        for i, info in reset_before.items():
+            infos = self._add_info(infos, info, i)
+        for i, (fo, fi) in final.items():
+            infos = self._add_info(infos, {"final_obs": fo, "final_info": fi}, i)
         return self._obs.copy(), self._rew.copy(), self._term.copy(), self._trunc.copy(), infos
+
+    def _batched_infos(self, res, idx) -> dict:
+        """The Gymnasium batched form (arrays + ``_key`` masks) of the stepped copies' info dicts, built
+        vectorised (equal to ``_add_info`` over the single-environment infos)."""
+        n = self.num_envs
+        if res.names is None:                   # a custom reward function: per-copy dicts
+            infos: dict[str, Any] = {}
+            for k, i in enumerate(idx):
+                infos = self._add_info(infos, res.info(k), int(i))
+            return infos
+        M = self.rows.stepper.M
+        mask = np.zeros(n, bool)
+        mask[idx] = True
+
+        def col(values, dtype):
+            a = np.zeros(n, dtype)
+            a[idx] = values
+            return a
+
+        rc: dict[str, Any] = {}
+        for j, name in enumerate(res.names):
+            rc[name] = col(res.comps[:, j], float)
+            rc["_" + name] = mask.copy()
+        infos = {"t": col(M[idx, BT.M_T], float), "_t": mask.copy(), "reward_components": rc,
+                 "_reward_components": mask.copy(), "fish_heave": col(M[idx, BT.M_HEAVE], float),
+                 "_fish_heave": mask.copy(), "fish_pitch": col(M[idx, BT.M_PITCH], float),
+                 "_fish_pitch": mask.copy(), "top_tension": col(M[idx, BT.M_TOP_T], float),
+                 "_top_tension": mask.copy(), "end_stop_hits": col(M[idx, BT.M_HITS].astype(int), int),
+                 "_end_stop_hits": mask.copy(), "slack": col(M[idx, BT.M_MIN_T] <= self.envs[0]._slack(), bool),
+                 "_slack": mask.copy()}
+        if res.terminal_costs:
+            tc = np.zeros(n)
+            tm = np.zeros(n, bool)
+            for k, v in res.terminal_costs.items():
+                tc[idx[k]] = v
+                tm[idx[k]] = True
+            rc["terminal"], rc["_terminal"] = tc, tm
+        for k, reason in res.reasons.items():
+            infos = self._add_info(infos, {"termination": reason}, int(idx[k]))
+        for k, i in enumerate(idx):
+            f = res.failures.get(int(i))
+            if f is not None:
+                full = res.info(k)
+                infos = self._add_info(infos, {"failure": full["failure"], "solver_failure": True}, int(i))
+        return infos
 
     def render(self):
         return tuple(env.render() for env in self.envs)

@@ -19,6 +19,9 @@ from __future__ import annotations
 
 import math
 
+from numba import njit
+
+from ..core import batch as BT
 from .base import TowEnv
 
 __all__ = ["WinchPayoutEnv"]
@@ -32,6 +35,8 @@ class WinchPayoutEnv(TowEnv):
     DEFAULT_OBSERVATIONS = ("tow_vel_z", "tow_acc_z", "top_tension", "winch_speed", "winch_length_dev",
                             "fish_heave", "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "last_action")
     ACTION_DIM = 1
+    ACT_KIND = BT.ACT_WINCH_SPEED
+    ACTUATOR_KEYS = ("winch_speed", "winch_length_dev", "winch_length", "effort")
 
     def __init__(self, *, winch_max_speed: float = 1.5, winch_max_acceleration: float = 1.5,
                  winch_travel: float = 10.0, **kwargs):
@@ -66,17 +71,28 @@ class WinchPayoutEnv(TowEnv):
     def _check_actuator(self, sim):
         sim.winch_state()                      # raises ValueError without a winch
 
-    def _apply_action(self, a):
-        self.sim.set_winch(speed=min(max(float(a[0]) * self.winch_max_speed, -self.winch_max_speed),
-                                     self.winch_max_speed))
+    @property
+    def _L0(self) -> float:
+        """Deployed winch-line length at the start of the episode (m)."""
+        return float(self._rows.stepper.refs[self._row, BT.R_L0])
 
-    def _actuator_reset(self):
-        self._L0 = float(self.sim.winch_state()["length"])
+    def _commands(self, A, rows, U, amap):
+        _speed_commands(A, rows, self.winch_max_speed, U)
 
-    def _measure_actuator(self, m, action):
-        ws = self.sim.winch_state()
-        v = ws["speed"] / self.winch_max_speed
-        m["winch_speed"] = v
-        m["winch_length_dev"] = ws["length"] - self._L0
-        m["winch_length"] = ws["length"]
-        m["effort"] = v
+    def _actuator_refs(self, ref, amap):
+        ref[BT.R_VMAX] = self.winch_max_speed
+        ref[BT.R_L0] = float(self.sim.winch_state()["length"])
+        ref[BT.R_EFFORT] = 1.0
+
+
+@njit(cache=True)
+def _speed_commands(A, rows, vmax, U):
+    """Clean actions ``A[rows]`` in place (NaN → 0, clip to [−1, 1]); payout speed command a·max_speed."""
+    for k in range(rows.shape[0]):
+        b = rows[k]
+        a = A[b, 0]
+        if a != a:
+            a = 0.0
+        a = min(max(a, -1.0), 1.0)
+        A[b, 0] = a
+        U[b, 0] = min(max(a * vmax, -vmax), vmax)
