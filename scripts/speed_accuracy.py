@@ -52,7 +52,6 @@ END_MACHINE = None
 MISSING_SOLVERS = [
     ("generalized-α (Chung–Hulbert, tunable ρ∞)", "model.md 5.8 / 8.1; ρ∞ = 0 has Houbolt's eigenvalues"),
     ("Newmark average acceleration", "model.md 5.8 (no numerical damping)"),
-    ("linearised frequency-domain model", "Hover et al. transfer functions exist only as closed-form checks"),
     ("thesis recursion (4.38)–(4.40) \"as published\"", "kept only as a failing regression check (tests/test_twin.py)"),
 ]
 

@@ -416,7 +416,7 @@ is the largest Δt that passed, and the smallest that failed is listed with its 
 (implicit default, Newton on the segment tensions, up to 4 step halvings per step), `euler`
 (semi-implicit), `rk2`, `rk4` (explicit, same model, axial damping ratio {ZETA} ≡ MoorDyn BA = −{2 * ZETA:g}).
 `solver.dt` is capped at {DT_CAP:g} s by the scene schema, so "{fmt(DT_CAP)}+" means stable at the cap.
-Not implemented (so not mapped): generalized-α, Newmark, the linearised frequency-domain model and the
+Not implemented (so not mapped): generalized-α, Newmark and the
 thesis's tension recursion "as published" (which fails outright, tests/test_twin.py).
 """,
          summary(grid, beh, ser, newton),
