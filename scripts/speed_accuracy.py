@@ -53,7 +53,6 @@ EXPLICIT_ZETA = 0.25
 START_LOAD = "?"
 END_MACHINE = None
 MISSING_SOLVERS = [
-    ("linearised frequency-domain model", "Hover et al. transfer functions exist only as closed-form checks"),
     ("thesis recursion (4.38)–(4.40) \"as published\"", "kept only as a failing regression check (tests/test_twin.py)"),
 ]
 

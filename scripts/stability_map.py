@@ -439,8 +439,8 @@ is the largest Δt that passed, and the smallest that failed is listed with its 
 model, Newton on the node positions, up to 4 step halvings, no axial damping), `euler`
 (semi-implicit), `rk2`, `rk4` (explicit, same model, axial damping ratio {ZETA} ≡ MoorDyn BA = −{2 * ZETA:g}).
 `solver.dt` is capped at {DT_CAP:g} s by the scene schema, so "{fmt(DT_CAP)}+" means stable at the cap.
-Not mapped: the linearised frequency-domain model and the thesis's tension recursion "as published"
-(`solver.tension_solve`, which fails outright at the thesis's own step guide, tests/test_explicit.py).
+Not mapped: the linearised frequency-domain model (it has no time step) and the thesis's tension recursion
+"as published" (`solver.tension_solve`, which fails outright at the thesis's own step guide, tests/test_explicit.py).
 """,
          summary(grid, beh, ser, newton),
          "## Map: shared deck (peer deck at 2 m/s, 1 m heave at 8 s, 8 s ramp)\n",
