@@ -48,6 +48,13 @@ def parse_override(text: str) -> tuple[str, object]:
     return key, parse_value(value.strip())
 
 
+def _fraction(text: str) -> float:
+    v = _positive(text)
+    if not v < 1:
+        raise argparse.ArgumentTypeError(f"must be a relative tolerance in (0, 1), e.g. 0.05 (got {text})")
+    return v
+
+
 def _positive(text: str) -> float:
     try:
         v = float(text)
@@ -85,6 +92,10 @@ def build_parser() -> argparse.ArgumentParser:
     pm.add_argument("--duration", type=_positive, default=120.0, help="simulated time in s (default 120)")
     pm.add_argument("--out", metavar="DIR", default=None, help="output folder (default ./out/<scene>)")
     pm.add_argument("--dt", type=_positive, default=None, help="time step in s (overrides solver.dt)")
+    pm.add_argument("--fidelity", type=_fraction, default=None, metavar="TOL",
+                    help="choose dt, segments and 2-D/3-D automatically so the fish heave/pitch statistics stay "
+                         "within TOL (relative, e.g. 0.05) of the fine default (docs/fidelity.md); without it, dt "
+                         "alone is chosen (5 %%) when the scene does not set solver.dt")
     pm.add_argument("--discard", type=_nonnegative, default=None, metavar="SECONDS",
                     help="start-up window left out of the statistics (default max(ramp, 0.25 duration))")
     pm.add_argument("--set", dest="overrides", action="append", type=parse_override, default=[],
@@ -168,9 +179,16 @@ def cmd_simulate(args) -> int:
     overrides = dict(args.overrides)
     if args.dt is not None:
         overrides["dt"] = args.dt
+    choice = None
     try:
-        sim = Simulator(args.scene, **overrides)
+        from .core.simulator import load
+        from .fidelity import configure
+        scene = load(args.scene)
+        scene, choice = configure(scene, tolerance=args.fidelity, overrides=overrides)
+        sim = Simulator(scene, **overrides)
     except SceneError as exc:
+        return _error(_one_line(exc))
+    except ValueError as exc:                 # fidelity selection impossible for this scene
         return _error(_one_line(exc))
     except SimulationDivergence as exc:       # the initial static solution can fail too
         return _error(_one_line(exc))
@@ -192,6 +210,8 @@ def cmd_simulate(args) -> int:
         print(f"simulating {sim.scene.name!r} for {duration:g} s (dt = {sim.dt:g} s)"
               + (f" with {', '.join(f'{k}={v!r}' for k, v in overrides.items())}" if overrides else ""),
               file=sys.stderr)
+    if choice is not None and not args.quiet:
+        print(f"fidelity: {choice.summary()} — {choice.reason} (docs/fidelity.md)", file=sys.stderr)
     try:
         res = simulate(sim, duration, progress=not args.quiet)
     except SimulationDivergence as exc:
@@ -200,6 +220,8 @@ def cmd_simulate(args) -> int:
     if overrides:
         res.meta["overrides"] = {k: v for k, v in overrides.items()}
     res.meta["discard"] = discard
+    if choice is not None:
+        res.meta["fidelity"] = choice.summary()
 
     out.mkdir(parents=True, exist_ok=True)
     res.save(out / "result.npz")

@@ -973,6 +973,9 @@ class Solver(_Model):
     tension_solve: _choice("tree", "as_published") = "tree"
     axial_damping_ratio: Num(ge=0, le=10) = 0.0
     rho_inf: Num(ge=0, le=1) = 0.2
+    # towenv.fidelity: choose dt, segments and 2-D/3-D for this relative tolerance of the fish statistics
+    # (also used, at 0.05, for dt alone when the scene does not set dt; docs/fidelity.md)
+    fidelity: Num(gt=0, lt=1) | None = None
     dt: Num(ge=1e-5, le=1, unit="s") = 0.02
     tolerance: Num(gt=0, unit="N") = 0.5
     relative_tolerance: Num(ge=0, lt=1) = 1e-5
@@ -1364,7 +1367,9 @@ class Scene(_Model):
                 raise SceneError(f"overrides must be a mapping of dotted paths to values (got {_short(overrides)})")
             items.update(overrides)
         items.update({k.replace("__", "."): v for k, v in kw.items()})
-        data = self.to_dict()
+        # only the fields the user set (defaults re-apply on validation), so "was solver.dt given?"
+        # survives overrides (towenv.fidelity selects what the user did not fix)
+        data = _clean(self.model_dump(mode="json", exclude_unset=True))
         probs = []
         for key, value in items.items():
             try:

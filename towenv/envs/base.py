@@ -70,7 +70,7 @@ class TowEnv(gym.Env):
     DEFAULT_SCENE = "two_part_coastal_ss4"
 
     def __init__(self, *, scene: Any = None, scene_overrides: Mapping[str, Any] | None = None,
-                 control_hz: float = 10.0, dt: float = 0.05, episode_seconds: float = 300.0,
+                 control_hz: float = 10.0, dt: float | None = None, episode_seconds: float = 300.0,
                  sea_codes: Sequence[int] = (3, 4, 5), sea_convention: str = "coastal",
                  heading_deg: float = 180.0, heading_spread_deg: float = 30.0, sea_generator=None,
                  vessel_speeds: Sequence[float] | None = None, cable_lengths: Sequence[float] | None = None,
@@ -81,29 +81,21 @@ class TowEnv(gym.Env):
                  slack_tension: float = 1.0, over_tension_fraction: float = 0.5,
                  breaking_load: float | Mapping[str, float] | None = None, floor_depth: float | None = 80.0,
                  body: str = "fish", sim_overrides: Mapping[str, Any] | None = None,
-                 render_mode: str | None = None):
+                 fidelity: float | None = None, render_mode: str | None = None):
         super().__init__()
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None "
                              f"(got {render_mode!r})")
         if not (math.isfinite(control_hz) and control_hz > 0):
             raise ValueError(f"control_hz must be > 0 (got {control_hz!r})")
-        if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be > 0 s (got {dt!r})")
+        if dt is not None and not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be > 0 s or None (automatic) (got {dt!r})")
+        if fidelity is not None and not (isinstance(fidelity, (int, float)) and 0 < fidelity < 1):
+            raise ValueError(f"fidelity must be a relative tolerance in (0, 1), e.g. 0.05, or None (got {fidelity!r})")
         if not (math.isfinite(episode_seconds) and episode_seconds > 0):
             raise ValueError(f"episode_seconds must be > 0 (got {episode_seconds!r})")
         self.render_mode = render_mode
         self.control_hz = float(control_hz)
-        self.physics_dt = float(dt)
-        self.substeps = max(1, int(round(1.0 / (control_hz * dt))))
-        if abs(self.substeps * dt * control_hz - 1.0) > 1e-6:
-            warnings.warn(f"TowEnv: 1/(control_hz·dt) = {1.0 / (control_hz * dt):g} is not a whole number; "
-                          f"using {self.substeps} physics steps per control step (control period "
-                          f"{self.substeps * dt:g} s)", stacklevel=2)
-        self.dt = self.substeps * self.physics_dt           # control period (MuJoCo frame_skip convention)
-        self.episode_seconds = float(episode_seconds)
-        self.max_steps = max(1, int(round(episode_seconds / self.dt)))
-        self.metadata = dict(self.metadata, render_fps=max(1, int(round(1.0 / self.dt))))
 
         self.sea_codes = tuple(int(c) for c in sea_codes)
         self.sea_convention = sea_convention
@@ -133,6 +125,18 @@ class TowEnv(gym.Env):
         if scene_overrides:
             base = base.with_overrides(dict(scene_overrides))
         self.base_scene = self._prepare_scene(base)
+        self.fidelity = None
+        dt = self._resolve_time_step(dt, fidelity, heading_deg)
+        self.physics_dt = float(dt)
+        self.substeps = max(1, int(round(1.0 / (control_hz * dt))))
+        if abs(self.substeps * dt * control_hz - 1.0) > 1e-6:
+            warnings.warn(f"TowEnv: 1/(control_hz·dt) = {1.0 / (control_hz * dt):g} is not a whole number; "
+                          f"using {self.substeps} physics steps per control step (control period "
+                          f"{self.substeps * dt:g} s)", stacklevel=2)
+        self.dt = self.substeps * self.physics_dt           # control period (MuJoCo frame_skip convention)
+        self.episode_seconds = float(episode_seconds)
+        self.max_steps = max(1, int(round(episode_seconds / self.dt)))
+        self.metadata = dict(self.metadata, render_fps=max(1, int(round(1.0 / self.dt))))
         if cable_lengths is not None and cable_line not in [ln.name for ln in self.base_scene.lines]:
             raise ValueError(f"cable_line {cable_line!r} is not a line of scene {self.base_scene.name!r} "
                              f"(lines: {[ln.name for ln in self.base_scene.lines]})")
@@ -185,6 +189,36 @@ class TowEnv(gym.Env):
         return self._row_dict(self._rows.stepper.M[self._row], self._rows.prev_action[self._row])
 
     # ------------------------------------------------------------------ subclass hooks
+    def _resolve_time_step(self, dt, fidelity, heading_deg):
+        """Physics Δt: ``dt`` if given; else automatic fidelity selection (towenv.fidelity, docs/fidelity.md)
+        over the divisors of the control period — Δt, segments and 2-D/3-D with ``fidelity`` (or the scene's
+        ``solver.fidelity``), Δt alone when the scene does not set ``solver.dt``; else the scene's Δt. The
+        choice is made once, for the middle sea state of ``sea_codes`` (``self.fidelity`` records it)."""
+        if dt is not None:
+            return float(dt)
+        sc = self.base_scene
+        if fidelity is None and sc.solver.fidelity is None and "dt" in sc.solver.model_fields_set:
+            return float(sc.solver.dt)
+        from ..fidelity import configure
+        from ..sea import SeaState
+        period = 1.0 / self.control_hz
+        cands = tuple(period / k for k in (1, 2, 4, 5, 10, 20) if 0.005 <= period / k <= 0.2)
+        code = sorted(self.sea_codes)[len(self.sea_codes) // 2] if self.sea_codes else 4
+        sea = SeaState.from_code(code, self.sea_convention, heading_deg=heading_deg)
+        # the linearised predictor has no winch (payout remeshes): choose on the scene without it
+        probe = sc.with_overrides({"winch": None}) if getattr(sc, "winch", None) is not None else sc
+        try:
+            _, choice = configure(probe, sea, fidelity, dt_candidates=cands or (period,))
+        except ValueError:
+            if fidelity is not None:
+                raise
+            choice = None
+        if choice is None:
+            return float(sc.solver.dt)
+        self.base_scene = sc.with_overrides({k: v for k, v in choice.overrides().items() if k != "solver.dt"})
+        self.fidelity = choice
+        return float(choice.dt)
+
     def _prepare_scene(self, scene):
         """Turn the user's scene into the environment's scene (e.g. add the actuator). Default: as is."""
         return scene

@@ -1,0 +1,131 @@
+"""Automatic fidelity selection (towenv.fidelity): the discrete-time error predictor, the selection rules,
+and one held-out time-domain check. The full check over many scenes is scripts/fidelity_check.py
+(docs/fidelity.md)."""
+import math
+
+import numpy as np
+import pytest
+
+from towenv import fidelity as F
+from towenv.core.run import simulate
+from towenv.core.simulator import load
+
+
+def _deck(amplitude=0.5, period=3.0):
+    return load("peer_deck").with_overrides({
+        "vessel.speed": 2.0,
+        "vessel.excitation": [{"type": "sinusoid", "axis": "z", "amplitude": amplitude, "period": period}]})
+
+
+def test_houbolt_operator_orders():
+    # Taylor series of the Houbolt formulas on e^{iωt}: A(ω)/(−ω²) = 1 + (11/12)(ωΔt)² + …, and
+    # V(ω)/(iω) = 1 + i(ωΔt)³/4 + … — halving Δt divides the errors by 4 and 8
+    w = np.array([0.5, 1.0, 2.0])
+    errs = []
+    for dt in (0.02, 0.01):
+        a, v = F.houbolt_operators(w, dt)
+        errs.append((np.abs(a / (-w ** 2) - 1), np.abs(v / (1j * w) - 1)))
+    for k, order in ((0, 2), (1, 3)):
+        ratio = errs[0][k] / errs[1][k]
+        assert np.allclose(ratio, 2.0 ** order, rtol=0.02), (k, ratio)
+    a, v = F.houbolt_operators(w, 0.01)
+    assert np.allclose((a / (-w ** 2) - 1).real, 11 / 12 * (w * 0.01) ** 2, rtol=0.01)
+
+
+def test_predicted_time_step_error_matches_the_simulator():
+    """The linear model with Houbolt's discrete operators predicts how the fish heave and the top tension
+    of the nonlinear run change with Δt (numerical damping/period error), not just its order."""
+    sc = _deck()
+    pred = F._Predictor(sc, None, ("fish_heave", "top_tension"))
+    cont, _ = pred.stats(1.0, None)
+    ref = simulate(sc.with_overrides({"solver.dt": 0.005}), 90.0)
+    m0 = ref.t > 45
+    for dt in (0.2, 0.3):
+        d, _ = pred.stats(1.0, dt)
+        run = simulate(sc.with_overrides({"solver.dt": dt}), 90.0)
+        m = run.t > 45
+        meas_h = np.std(run.bodies["ball"]["heave"][m]) / np.std(ref.bodies["ball"]["heave"][m0]) - 1
+        meas_t = np.std(run.top_tension[m]) / np.std(ref.top_tension[m0]) - 1
+        pred_h = d["fish_heave"] / cont["fish_heave"] - 1
+        pred_t = d["top_tension"] / cont["top_tension"] - 1
+        # the changes are 1-30 %; the prediction must get them within 10 % of their size
+        assert abs(meas_t) > 0.1
+        assert pred_h == pytest.approx(meas_h, rel=0.1)
+        assert pred_t == pytest.approx(meas_t, rel=0.1)
+
+
+def test_select_meets_its_own_prediction_and_orders_by_cost():
+    sc = _deck(amplitude=1.0, period=8.0)
+    loose = F.select(sc, tolerance=0.10)
+    tight = F.select(sc, tolerance=0.005)
+    for ch in (loose, tight):
+        assert ch.method == "houbolt"
+        assert ch.error <= ch.tolerance
+        assert ch.relative_cost <= 1.0
+        feasible = [c for c in ch.candidates if c.error <= ch.tolerance]
+        assert ch.relative_cost == min(c.relative_cost for c in feasible)
+    assert tight.relative_cost >= loose.relative_cost
+    # overrides realise the choice
+    sc2 = loose.apply(sc)
+    assert sc2.solver.dt == loose.dt
+    assert sc2.line("cable").segments == loose.segments["cable"]
+
+
+def test_rules_slack_and_nonlinear_flow():
+    # the two-part tow's light secondary goes slack in SS4: segments are not reduced
+    ch = F.select("two_part_coastal_ss4", tolerance=0.1)
+    assert "slack" in ch.reason and ch.segment_factor >= 1.0
+    # the deep tow at U = 0: the fish's incidence flips, the linear prediction does not apply
+    ch = F.select("hover_deep_tow", tolerance=0.1)
+    assert ch.dt == F.FINE_DT and ch.segment_factor == F.FINE_SEGMENT_FACTOR
+    assert "strongly nonlinear" in ch.reason
+
+
+def test_linearised_model_offered_only_when_loose_and_taut():
+    sc = _deck(amplitude=0.2, period=8.0)
+    assert F.select(sc, tolerance=0.2).method == "linear"
+    assert F.select(sc, tolerance=0.2, allow_linear=False).method == "houbolt"
+    assert F.select(sc, tolerance=0.05).method == "houbolt"
+
+
+@pytest.mark.parametrize("kw, field", [({"tolerance": 0.0}, "tolerance"), ({"tolerance": 1.5}, "tolerance"),
+                                       ({"tolerance": 0.05, "outputs": ("bogus",)}, "outputs"),
+                                       ({"tolerance": 0.05, "dt_candidates": (2.0,)}, "dt_candidates")])
+def test_bad_input_names_the_field(kw, field):
+    with pytest.raises(ValueError, match=field):
+        F.select(_deck(), **kw)
+
+
+def test_configure_respects_what_the_user_fixed():
+    fixed = load("two_part_tow_1")                       # its TOML sets solver.dt
+    sc, ch = F.configure(fixed)
+    assert ch is None and sc.solver.dt == fixed.solver.dt
+    free = _deck(amplitude=1.0, period=8.0)              # peer_deck sets no solver.dt (overrides keep that)
+    assert "dt" not in free.solver.model_fields_set
+    sc, ch = F.configure(free)
+    assert ch is not None and sc.solver.dt == ch.dt and sc.line("cable").segments == 20   # Δt only
+    sc, ch = F.configure(free, overrides={"dt": 0.01})
+    assert ch is None
+    sc, ch = F.configure(fixed, tolerance=0.1)           # asking for it overrides the scene's Δt
+    assert ch is not None and sc.solver.dt == ch.dt
+
+
+def test_held_out_case_meets_tolerance_in_the_time_domain():
+    """conventional_tow in a coastal SS4 following sea (not used to build the rules): the chosen
+    configuration's fish heave/pitch std stay within the tolerance of the fine default, and it is cheaper."""
+    sc = load("conventional_tow").with_overrides({
+        "sea": {"code": 4, "convention": "coastal", "heading_deg": 0.0, "seed": 3},
+        "vessel.model": "coastal_survey", "vessel.excitation": None})
+    tol = 0.05
+    ch = F.select(sc, tolerance=tol)
+    assert ch.relative_cost < 0.5
+    fine = {"solver.dt": F.FINE_DT}
+    for name, n in F.scaled_segments(sc, F.FINE_SEGMENT_FACTOR).items():
+        fine[f"lines.{name}.segments"] = n
+    a = simulate(sc.with_overrides(fine), 200.0)
+    b = simulate(ch.apply(sc), 200.0)
+    fish = [x.name for x in sc.bodies if x.kind == "fish"][0]
+    for key, get in (("heave", lambda r: r.bodies[fish]["heave"]), ("pitch", lambda r: r.bodies[fish]["euler"][:, 1])):
+        sa = np.std(get(a)[a.t > 60])
+        sb = np.std(get(b)[b.t > 60])
+        assert abs(sb / sa - 1) <= tol, (key, sa, sb, ch.summary())

@@ -1,0 +1,461 @@
+"""Automatic fidelity selection: the cheapest model of a scene that keeps the fish statistics within a tolerance.
+
+``select(scene, sea_state, tolerance)`` returns a :class:`Fidelity`: the time step, the segment counts per
+line, 2-D (vertical plane) or 3-D, and nonlinear time domain (Houbolt) or the linearised frequency-domain
+model, with the predicted relative error of the fish's heave and pitch statistics against the *fine
+default* (Houbolt, Δt = 0.01 s, twice the scene's segments, 3-D) and the predicted cost relative to it.
+
+How the error is predicted (no time-domain run is needed; a selection takes tens of milliseconds):
+
+* **Time step.** The linearised model (:mod:`towenv.linear`) is solved with Houbolt's *discrete*
+  operators in place of ``iω`` and ``−ω²``: for a response ``x_n = X zⁿ``, ``z = e^{iωΔt}``, the Houbolt
+  acceleration and velocity of the kernel are ``A(z) X`` and ``V(z) X`` with
+  ``A = (2 − 5z⁻¹ + 4z⁻² − z⁻³)/Δt²`` and ``V = (11 − 18z⁻¹ + 9z⁻² − 2z⁻³)/(6Δt)``. The resulting discrete
+  RAOs are exactly what the time-stepping does to the linearised system (numerical damping and period
+  error at every frequency of the sea), so the change of the significant amplitudes with Δt is predicted
+  rather than guessed.
+* **Segments.** The same linear model built with the candidate segment counts against the fine default's.
+* **2-D.** Chosen when nothing excites the lateral plane (head or following long-crested sea, no lateral
+  current, no sway/yaw/roll excitation, symmetric bodies); its error is round-off (tested).
+* **Linearised model.** Offered only when the tolerance is at least its measured accuracy against the
+  nonlinear simulation (:data:`LINEAR_ERROR_BOUND`, docs/linear.md) and the predicted tensions stay well
+  away from slack (mean tension ≥ :data:`SLACK_MARGIN` standard deviations at the top and at the fish).
+
+The time-step and segment errors are added (conservative) and multiplied by :data:`SAFETY`, calibrated
+on the *build* cases of ``scripts/fidelity_check.py`` and checked on held-out scenes (docs/fidelity.md).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+FINE_DT = 0.01
+FINE_SEGMENT_FACTOR = 2.0
+DT_CANDIDATES = (0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2)
+SEGMENT_FACTORS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
+OUTPUTS = ("fish_heave", "fish_pitch")
+#: multiplies the predicted discretisation error (calibrated on the build cases, docs/fidelity.md)
+SAFETY = 1.5
+#: measured accuracy of the linearised model's significant amplitudes in moderate seas (docs/linear.md)
+LINEAR_ERROR_BOUND = 0.15
+#: mean tension / tension standard deviation needed before the linearised model is offered
+SLACK_MARGIN = 4.0
+#: below this mean/std tension ratio (at the top or the fish segment) cables go slack in the run: the
+#: linear predictor then underestimates the discretisation error (snap loads are nonlinear), so the
+#: segment count is not reduced below the scene's and the safety factor is SAFETY_SLACK
+SLACK_NONLINEAR = 2.0
+SAFETY_SLACK = 2.5
+#: the fish's mean relative flow must exceed this many standard deviations of its velocity for the
+#: linearised error prediction to apply (at U ≈ 0 the body's incidence flips through ±90° every cycle and
+#: its pitch is not a linear function of the motion — docs/linear.md "where it fails")
+FLOW_MARGIN = 2.0
+
+
+def houbolt_operators(omega, dt):
+    """Houbolt's discrete acceleration and velocity operators ``A(ω), V(ω)`` (replace ``−ω²`` and ``iω``)."""
+    z1 = np.exp(-1j * np.asarray(omega, float) * dt)
+    a = (2.0 - 5.0 * z1 + 4.0 * z1 ** 2 - z1 ** 3) / (dt * dt)
+    v = (11.0 - 18.0 * z1 + 9.0 * z1 ** 2 - 2.0 * z1 ** 3) / (6.0 * dt)
+    return a, v
+
+
+@dataclass
+class Fidelity:
+    """A chosen model configuration (see :func:`select`)."""
+    method: str                     # "houbolt" (nonlinear time domain) or "linear" (frequency domain)
+    dt: float | None
+    segment_factor: float
+    segments: dict                  # line name -> int or tuple per span
+    planar: bool
+    predicted_error: dict           # output -> predicted relative error of its significant amplitude
+    relative_cost: float            # predicted wall time / the fine default's
+    tolerance: float
+    reason: str = ""
+    candidates: list = field(default_factory=list, repr=False)
+    seconds: float = 0.0
+
+    @property
+    def error(self) -> float:
+        return max(self.predicted_error.values()) if self.predicted_error else 0.0
+
+    def overrides(self) -> dict:
+        """Scene overrides (dotted paths) that realise this configuration in the time-domain simulator."""
+        out = {}
+        if self.dt is not None:
+            out["solver.dt"] = float(self.dt)
+        for name, n in self.segments.items():
+            out[f"lines.{name}.segments"] = list(n) if isinstance(n, tuple) else int(n)
+        if self.planar:
+            out["solver.planar"] = True
+        return out
+
+    def apply(self, scene):
+        from .core.simulator import load
+        return load(scene).with_overrides(self.overrides())
+
+    def summary(self) -> str:
+        seg = ", ".join(f"{k} {v}" for k, v in self.segments.items())
+        if self.method == "linear":
+            head = "linearised frequency-domain model"
+        else:
+            head = f"Houbolt Δt = {self.dt:g} s, {'2-D' if self.planar else '3-D'}"
+        errs = ", ".join(f"{k} {100 * v:.2g} %" for k, v in self.predicted_error.items())
+        return (f"{head}; segments: {seg}; predicted error {errs} (tolerance {100 * self.tolerance:g} %); "
+                f"cost {self.relative_cost:.3g} × the fine default")
+
+
+# ------------------------------------------------------------------------------------------------------
+def scaled_segments(scene, factor: float) -> dict:
+    """Segment counts per line scaled by ``factor`` (at least one per span), as scene values."""
+    out = {}
+    for ln in scene.lines:
+        spans = ln.span_segments(scene.junctions(ln.name)) if hasattr(scene, "junctions") else [ln.segments]
+        new = tuple(max(1, int(round(factor * n))) for n in spans)
+        out[ln.name] = new if isinstance(ln.segments, tuple) else int(sum(new)) if len(new) == 1 else new
+    return out
+
+
+def _with_segments(scene, segs):
+    return scene.with_overrides({f"lines.{k}.segments": (list(v) if isinstance(v, tuple) else v)
+                                 for k, v in segs.items()})
+
+
+def _n_nodes(segs) -> int:
+    return int(sum(sum(v) if isinstance(v, tuple) else v for v in segs.values()))
+
+
+def lateral_excitation(scene, sea_state) -> str | None:
+    """Why the scene is not planar (a string), or None when nothing excites the lateral plane."""
+    cur = getattr(scene, "current", None)
+    if cur is not None:
+        prof = getattr(cur, "profile", None) or []
+        for p in prof:
+            v = p[1:] if len(p) > 2 else p
+            if len(v) >= 2 and abs(float(v[1])) > 0:
+                return "current has a lateral (y) component"
+        vel = getattr(cur, "velocity", None)
+        if vel is not None and len(vel) > 1 and abs(float(vel[1])) > 0:
+            return "current has a lateral (y) component"
+    ves = scene.vessel
+    for e in getattr(ves, "excitation", None) or []:
+        ax = getattr(e, "axis", "z")
+        if ax not in ("x", "z", "pitch"):
+            return f"vessel excitation on axis {ax!r}"
+    if getattr(ves, "manoeuvres", None) or getattr(ves, "turn", None):
+        return "the vessel manoeuvres"
+    if sea_state is not None:
+        h = float(sea_state.heading_deg) % 360.0
+        if min(abs(h - 0.0), abs(h - 180.0), abs(h - 360.0)) > 1e-9:
+            return f"sea heading {sea_state.heading_deg:g}° is not head or following"
+        if sea_state.spreading_s is not None:
+            return "short-crested sea (spreading)"
+    return None
+
+
+def _sea_of(scene, sea_state):
+    if sea_state is not None:
+        return sea_state
+    sea = getattr(scene, "sea", None)
+    return sea.sea_state() if sea is not None else None
+
+
+class _Predictor:
+    """Linear-model statistics of the fish outputs for a segment factor and a time step (cached)."""
+
+    def __init__(self, scene, sea_state, outputs):
+        from .linear import LinearModel
+        self.scene, self.sea, self.outputs = scene, sea_state, outputs
+        self._lm = {}
+        self._LM = LinearModel
+
+    def model(self, factor):
+        if factor not in self._lm:
+            sc = _with_segments(self.scene, scaled_segments(self.scene, factor))
+            self._lm[factor] = self._LM(sc)
+        return self._lm[factor]
+
+    def stats(self, factor, dt):
+        """Standard deviations of the outputs (continuous time when ``dt`` is None)."""
+        lm = self.model(factor)
+        if self.sea is None:
+            return self._sinusoid_stats(lm, dt)
+        if dt is None:
+            r = lm.spectral(self.sea)
+        else:
+            lm._solve = lambda omega, *a: _discrete_solve(omega, dt, *a)
+            try:
+                r = lm.spectral(self.sea)
+            finally:
+                del lm._solve
+        return {k: r.std[k] for k in self.outputs if k in r.std}, r
+
+    def flow_margin(self, factor) -> float:
+        """|mean relative flow at the fish| / std of the fish's velocity (surge + heave), continuous time."""
+        from .core import kernels as K
+        lm = self.model(factor)
+        s = lm.system
+        node = lm.fish.node if lm.fish is not None else int(s.lines[0].nodes[-1])
+        cur = np.zeros(3)
+        K.current_at(float(lm.r0[node, 2]), s.cur_z, s.cur_v, cur)
+        u_rel = float(np.linalg.norm(np.asarray(lm.U, float) - cur))
+        saved = self.outputs
+        self.outputs = ("fish_surge", "fish_heave")
+        try:
+            if self.sea is None:
+                var = 0.0
+                for period, top in self._sinusoids().items():
+                    w = 2 * math.pi / period
+                    r = lm.response(np.array([w]), top=top)
+                    amp = float(np.linalg.norm(top))
+                    var += sum(0.5 * (abs(r.rao[k][0]) * amp * w) ** 2 for k in self.outputs)
+            else:
+                r = lm.spectral(self.sea)
+                dw = np.gradient(r.omega)
+                var = float(sum(np.sum(np.abs(r.raos[k]) ** 2 * r.omega_e ** 2 * r.wave_spectrum * dw)
+                                for k in self.outputs))
+        finally:
+            self.outputs = saved
+        sd = math.sqrt(var)
+        return u_rel / sd if sd > 0 else np.inf
+
+    def _sinusoids(self):
+        comps = [e for e in (self.scene.vessel.excitation or []) if getattr(e, "type", "") == "sinusoid"]
+        if not comps:
+            raise ValueError("fidelity.select: the scene has no sea and no sinusoidal excitation; give sea_state")
+        by_period = {}
+        for e in comps:
+            if e.axis not in ("x", "y", "z"):
+                raise ValueError(f"fidelity.select: sinusoidal excitation on axis {e.axis!r} is not supported by the "
+                                 "linearised predictor (x, y, z only); give sea_state")
+            top = by_period.setdefault(float(e.period), np.zeros(3, complex))
+            top["xyz".index(e.axis)] += float(e.amplitude) * np.exp(1j * math.radians(float(getattr(e, "phase_deg", 0.0))))
+        return by_period
+
+    def slack_margin(self, factor) -> float:
+        """min(mean / std) of the tension of the top segment and of the fish's segment (continuous time)."""
+        lm = self.model(factor)
+        keys = ("top_segment_tension", "fish_tension")
+        saved = self.outputs
+        self.outputs = keys
+        try:
+            sd, _ = self.stats(factor, None)
+        finally:
+            self.outputs = saved
+        s = lm.system
+        top_seg = int(s.node_segs[int(s.cable_top_node), 0])
+        fish_node = lm.fish.node if lm.fish is not None else int(s.lines[0].nodes[-1])
+        fish_seg = int(s.node_up_seg[fish_node]) if lm.fish is not None else int(s.lines[0].segments[-1])
+        out = np.inf
+        for key, seg in (("top_segment_tension", top_seg), ("fish_tension", fish_seg)):
+            if sd[key] > 0:
+                out = min(out, float(lm.T0[seg]) / sd[key])
+        return float(out)
+
+    def _sinusoid_stats(self, lm, dt):
+        # the scene's own sinusoidal tow-point excitation: std = sqrt(Σ |X_k|² / 2)
+        var = {k: 0.0 for k in self.outputs}
+        present = set(var)
+        last = None
+        by_period = self._sinusoids()
+        for period, top in by_period.items():
+            w = np.array([2 * math.pi / period])
+            if dt is None:
+                r = lm.response(w, top=top)
+            else:
+                lm._solve = lambda omega, *a: _discrete_solve(omega, dt, *a)
+                try:
+                    r = lm.response(w, top=top)
+                finally:
+                    del lm._solve
+            amp = float(np.linalg.norm(top))
+            for k in self.outputs:
+                if k in r.rao:
+                    var[k] += 0.5 * (abs(r.rao[k][0]) * amp) ** 2
+                else:
+                    var.pop(k, None)
+            last = r
+        return {k: math.sqrt(v) for k, v in var.items() if k in present}, last
+
+
+def _discrete_solve(omega, dt, Utop, Kq, Ku, Mq, Mu, C, Cu, Cadd):
+    """``LinearModel._solve`` with Houbolt's discrete operators in place of ``−ω²`` and ``iω``."""
+    a, v = houbolt_operators(omega, dt)
+    a = a[:, None, None]
+    v = v[:, None, None]
+    A = Kq[None] + a * Mq[None] + v * (C + Cadd[None])
+    B = Ku[None] + a * Mu[None] + v * Cu
+    rhs = -np.einsum("fij,fj->fi", B, Utop)
+    X = np.linalg.solve(A, rhs[..., None])[..., 0]
+    if not np.all(np.isfinite(X)):
+        raise FloatingPointError("non-finite discrete response")
+    return np.ascontiguousarray(X)
+
+
+def _ratio_dev(a, b):
+    return a / b - 1.0 if b > 0 else 0.0
+
+
+def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, allow_linear: bool = True,
+           allow_planar: bool = True, dt_candidates=DT_CANDIDATES, segment_factors=SEGMENT_FACTORS,
+           safety: float = SAFETY, fixed_segments: bool = False) -> Fidelity:
+    """The cheapest configuration predicted to keep the significant amplitudes of ``outputs`` (fish heave
+    and pitch by default) within ``tolerance`` (relative, e.g. 0.05) of the fine default.
+
+    ``sea_state``: a :class:`towenv.sea.SeaState`; default the scene's ``[sea]``, else the scene's
+    sinusoidal tow-point excitation. Errors are predicted with the linearised model (module docstring):
+    ``e = SAFETY · (|δ_seg(f)| + |δ_Δt(Δt) − δ_Δt(Δt_fine)|)`` with ``δ_seg`` the relative change of the
+    statistic with the segment factor ``f`` (vs ×2) and ``δ_Δt`` its relative change from continuous time
+    to Houbolt at Δt (scene segments). Cost = nodes/Δt relative to the fine default (× the measured 2-D
+    saving when planar). ``fixed_segments=True`` keeps the scene's segment counts and chooses Δt alone
+    (its error then counts the time step only)."""
+    from .core.simulator import load
+    t0 = time.perf_counter()
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not (0.0 < tolerance < 1.0):
+        raise ValueError(f"tolerance: must be a relative error in (0, 1), e.g. 0.05, got {tolerance!r}")
+    unknown = [k for k in outputs if k not in ("fish_heave", "fish_pitch", "fish_surge", "fish_sway", "fish_roll",
+                                               "fish_yaw", "top_tension", "fish_tension")]
+    if unknown or not outputs:
+        raise ValueError(f"outputs: must be a non-empty subset of fish_heave, fish_pitch, fish_surge, fish_sway, "
+                         f"fish_roll, fish_yaw, top_tension, fish_tension; got {outputs!r}")
+    for name, vals, lo, hi in (("dt_candidates", dt_candidates, 1e-4, 1.0),
+                               ("segment_factors", segment_factors, 0.05, 8.0)):
+        v = np.asarray(vals, float)
+        if v.ndim != 1 or len(v) == 0 or not np.all((v >= lo) & (v <= hi)):
+            raise ValueError(f"{name}: must be a non-empty list of values in [{lo:g}, {hi:g}], got {vals!r}")
+    sc = load(scene)
+    sea = _sea_of(sc, sea_state)
+    pred = _Predictor(sc, sea, tuple(outputs))
+    cont_ref, ref_res = pred.stats(FINE_SEGMENT_FACTOR, None)
+    cont_1, _ = pred.stats(1.0, None)
+    if not cont_ref:
+        raise ValueError(f"outputs: none of {tuple(outputs)} exists for this scene (no fish body?)")
+    big = max(cont_ref.values())
+    used = [k for k in outputs if k in cont_ref and cont_ref[k] > 1e-9 * max(big, 1e-300)]
+    margin = pred.slack_margin(FINE_SEGMENT_FACTOR)
+    slack = margin < SLACK_NONLINEAR
+    flow = pred.flow_margin(FINE_SEGMENT_FACTOR)
+    if slack:
+        safety = max(safety, SAFETY_SLACK)
+        segment_factors = [f for f in segment_factors if f >= 1.0] or [1.0]
+    if fixed_segments:
+        segment_factors = [1.0]
+    d_seg = {}
+    for f in segment_factors:
+        s, _ = pred.stats(float(f), None) if f != 1.0 else (cont_1, None)
+        d_seg[float(f)] = {k: _ratio_dev(s[k], cont_ref[k]) for k in used}
+    d_dt = {}
+    for dt in sorted(set(float(x) for x in dt_candidates) | {FINE_DT}):
+        s, _ = pred.stats(1.0, dt)
+        d_dt[dt] = {k: _ratio_dev(s[k], cont_1[k]) for k in used}
+    why_not_planar = lateral_excitation(sc, sea) if allow_planar else "not allowed"
+    planar = why_not_planar is None and _planar_supported()
+    fine_segs = scaled_segments(sc, FINE_SEGMENT_FACTOR)
+    fine_cost = step_cost(_n_nodes(fine_segs), FINE_DT)
+    cands = []
+    for f in segment_factors:
+        segs = scaled_segments(sc, float(f))
+        for dt in dt_candidates:
+            dt = float(dt)
+            seg_part = 0.0 if fixed_segments else 1.0
+            err = {k: safety * (seg_part * abs(d_seg[float(f)][k]) + abs(d_dt[dt][k] - d_dt[FINE_DT][k]))
+                   for k in used}
+            cost = step_cost(_n_nodes(segs), dt) / fine_cost * (PLANAR_COST if planar else 1.0)
+            cands.append(Fidelity("houbolt", dt, float(f), segs, planar, err, cost, float(tolerance),
+                                  seconds=0.0))
+    ok = [c for c in cands if c.error <= tolerance]
+    reason = ""
+    if flow < FLOW_MARGIN:
+        ok = []
+        reason = (f"the fish's mean relative flow is only {flow:.2g} × its velocity std (< {FLOW_MARGIN:g}): its "
+                  "hydrodynamics are strongly nonlinear and the linear error prediction does not apply — ")
+    if ok:
+        best = min(ok, key=lambda c: (c.relative_cost, c.error))
+        reason = f"cheapest of {len(ok)}/{len(cands)} Houbolt configurations predicted within tolerance"
+    elif fixed_segments:
+        segs = scaled_segments(sc, 1.0)
+        best = Fidelity("houbolt", FINE_DT, 1.0, segs, False, {k: 0.0 for k in used},
+                        step_cost(_n_nodes(segs), FINE_DT) / fine_cost, float(tolerance))
+    else:
+        best = Fidelity("houbolt", FINE_DT, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
+                        float(tolerance))
+        reason += "no cheaper configuration is predicted within tolerance: the fine default"
+    if planar:
+        reason += "; 2-D (nothing excites the lateral plane)"
+    elif allow_planar:
+        reason += f"; 3-D ({why_not_planar})" if why_not_planar else "; 3-D"
+    if slack:
+        reason += (f"; cables go slack (mean tension only {margin:.2g} std above zero): segments not reduced, "
+                   f"safety factor {safety:g}")
+    if allow_linear and tolerance >= LINEAR_ERROR_BOUND and flow >= FLOW_MARGIN:
+        if margin >= SLACK_MARGIN:
+            best = Fidelity("linear", None, FINE_SEGMENT_FACTOR, fine_segs, False,
+                            {k: LINEAR_ERROR_BOUND for k in used}, 0.0, float(tolerance))
+            reason = (f"linearised model: tolerance ≥ its measured accuracy ({100 * LINEAR_ERROR_BOUND:g} %) and "
+                      f"mean tension ≥ {margin:.1f} std (no slack)")
+        else:
+            reason += f"; linearised model rejected: mean tension only {margin:.1f} std above zero (slack risk)"
+    best.reason = reason
+    best.candidates = cands
+    best.seconds = time.perf_counter() - t0
+    return best
+
+
+#: wall time of the 2-D model relative to 3-D at equal settings (scripts/fidelity_check.py measures it)
+PLANAR_COST = 1.0
+
+
+def _planar_supported() -> bool:
+    from .scene import Solver
+    return "planar" in getattr(Solver, "model_fields", {})
+
+
+def step_cost(n_nodes: int, dt: float) -> float:
+    """Relative wall time per simulated second of a Houbolt run: ``(a₀ + it(Δt)·(1 + nodes/40))/Δt`` with
+    ``it(Δt) = 1 + 22 Δt`` Newton iterations per step and ``a₀ = 2`` (per-step work outside the iteration:
+    tow-point motion, history, recording). Fitted to 36 timed runs of two_part_tow_1, conventional_tow and
+    two_part_tow_2 (Δt 0.01–0.2 s, 3–20 segments; docs/fidelity.md)."""
+    return (2.0 + (1.0 + 22.0 * dt) * (1.0 + n_nodes / 40.0)) / dt
+
+
+#: tolerance used to choose Δt when a scene does not set ``solver.dt`` and no tolerance is given
+DEFAULT_TOLERANCE = 0.05
+
+
+def configure(scene, sea_state=None, tolerance: float | None = None, *, dt_candidates=DT_CANDIDATES,
+              overrides=None):
+    """Apply :func:`select` where the user did not fix the settings; returns ``(scene, Fidelity or None)``.
+
+    * ``tolerance`` given, or the scene sets ``solver.fidelity``: Δt, the segment counts and 2-D/3-D are
+      all chosen (time domain only — the linearised model is a separate tool, :mod:`towenv.linear`);
+    * otherwise, when neither the scene nor ``overrides`` set ``solver.dt``: Δt alone is chosen for
+      :data:`DEFAULT_TOLERANCE`, keeping the scene's segments;
+    * otherwise the scene is returned unchanged (``None``).
+    ``overrides``: the dotted overrides / solver keywords the caller will apply (``dt`` or
+    ``solver.dt`` there count as fixing the time step)."""
+    from .core.simulator import load
+    sc = load(scene)
+    ov = dict(overrides or {})
+    dt_fixed = "dt" in sc.solver.model_fields_set or "dt" in ov or "solver.dt" in ov
+    tol = tolerance if tolerance is not None else sc.solver.fidelity
+    if tol is None and dt_fixed:
+        return sc, None
+    if sc.solver.method != "houbolt":
+        return sc, None
+    full = tol is not None
+    if full:       # asking for the automatic choice overrides the scene's own Δt; only the caller's fixes it
+        dt_fixed = "dt" in ov or "solver.dt" in ov
+    try:
+        ch = select(sc, sea_state, tol if full else DEFAULT_TOLERANCE, allow_linear=False,
+                    dt_candidates=dt_candidates, fixed_segments=not full)
+    except (ValueError, FloatingPointError) as exc:   # LinearisationError is a ValueError
+        if full:
+            raise ValueError(f"solver.fidelity: automatic fidelity selection is not possible for scene "
+                             f"{sc.name!r}: {exc}") from None
+        return sc, None          # nothing to predict from (e.g. no excitation): the schema's default dt
+    o = ch.overrides()
+    if dt_fixed:
+        o.pop("solver.dt", None)
+    return sc.with_overrides(o), ch
