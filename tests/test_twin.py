@@ -528,7 +528,8 @@ def test_failed_houbolt_step_matches_twin_and_leaves_state():
     assert probe.status == twin.OK and probe.iterations >= 2
     settings = sim.settings.array()
     settings[2] = probe.iterations - 1
-    like = twin.TwinStep(sim.system, settings, sim.hist_r, sim.hist_ang, sim.tens_hist, sim.top_react)
+    like = twin.TwinStep(sim.system, settings, sim.hist_r, sim.hist_ang, sim.tens_hist, sim.top_react,
+                         body_chart=sim.body_chart)
     res = twin.houbolt_step_np(like, dt, top)
     before = sim.snapshot()
     st, it, el, md = K.houbolt_step(dt, top, *sim._args, settings, sim._state, sim._ws, sim.comp)

@@ -928,6 +928,7 @@ class RigidBody(_BodyBase):
     horizontal_coefficients: CoefficientTable | None = None
     rotational_damping: Vec3(ge=0, unit="") = (0.1, 0.1, 0.1)
     quadratic_rotational_damping: Vec3(ge=0, unit="") = (0.5, 0.5, 0.5)
+    dof: _choice("6dof", "surge_heave_pitch") = "6dof"      # surge_heave_pitch: roll and yaw held
 
     @property
     def centre_of_buoyancy(self) -> tuple[float, float, float]:
@@ -984,6 +985,7 @@ class Solver(_Model):
     max_step_cuts: Int(ge=0) = 4
     max_strain: Num(gt=0) = 0.2
     settle_time: Num(ge=0, unit="s") = 0.0
+    planar: bool = False        # 2-D vertical-plane model: lateral node motion, body roll and yaw frozen
 
 
 # =====================================================================================================

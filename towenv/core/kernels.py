@@ -38,7 +38,7 @@ OK = 0
 FAIL_NEWTON = 1        # iteration cap reached / residual growing
 FAIL_NAN = 2           # non-finite number appeared
 FAIL_STRETCH = 3       # non-physical strain in a segment
-FAIL_ANGLE = 4         # body pitch reached the Euler singularity
+FAIL_ANGLE = 4         # body pitch reached ±85° inside its attitude chart (guard: re-charting keeps it far below)
 
 FREE = 0
 PRESCRIBED_TOP = 1
@@ -47,6 +47,11 @@ PRESCRIBED_FIXED = 3   # anchor: fixed in space
 COMPENSATOR = 4        # cable top node on a heave-compensator sheave: moves with the ship except along z
 NEED_REMESH = 10       # advance(): not a failure — the winch line needs a node inserted/removed
 RETRY_CONTACT = 11     # houbolt_step(): the sheave's end-stop contact state changed; redo the step
+
+# moving attitude chart (see ``body_rotation``): a body whose local pitch exceeds this at the start of a
+# step is re-charted (its local Euler angles restart from zero). Default of ``settings[7]``
+# (``SolverSettings.rechart_pitch``) when the settings array is shorter.
+RECHART_PITCH = math.pi / 6.0
 
 # heave compensator parameter layout (float64[16])
 C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_TRIAL, C_UNUSED, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
@@ -102,6 +107,87 @@ def rotation_matrix(roll, pitch, yaw, out):
     out[2, 0] = cg * sa * cb + sg * sb
     out[2, 1] = sg * sa * cb - cg * sb
     out[2, 2] = ca * cb
+
+
+@njit(cache=True)
+def body_rotation(ang, chart, out):
+    """Λ = Λ_f(φ, θ, ψ) · C: global -> body components of a body whose attitude is stored as local Euler
+    angles ``ang`` (roll, pitch, yaw) relative to its chart ``C`` (a constant rotation, global -> chart
+    components; the identity until the body's pitch first passes ``RECHART_PITCH``).
+
+    The body rates do not depend on the chart (Λ̇ = Λ̇_f C = −S(ω) Λ), so the Euler-rate kinematics and the
+    Houbolt differences work on the local angles unchanged. With C = 𝟙 the product is skipped, so a run
+    whose bodies never re-chart gives the same bits as a plain Euler-angle attitude."""
+    rotation_matrix(ang[0], ang[1], ang[2], out)
+    if chart[0, 0] == 1.0 and chart[1, 1] == 1.0 and chart[2, 2] == 1.0:
+        return
+    for i in range(3):
+        a0 = out[i, 0]
+        a1 = out[i, 1]
+        a2 = out[i, 2]
+        for j in range(3):
+            out[i, j] = a0 * chart[0, j] + a1 * chart[1, j] + a2 * chart[2, j]
+
+
+@njit(cache=True)
+def _chart_rotation(a0, a1, a2, chart, b, out):
+    """``body_rotation`` for body ``b`` of the per-body chart array (hot paths: no array view created)."""
+    rotation_matrix(a0, a1, a2, out)
+    if chart[b, 0, 0] == 1.0 and chart[b, 1, 1] == 1.0 and chart[b, 2, 2] == 1.0:
+        return
+    for i in range(3):
+        x0 = out[i, 0]
+        x1 = out[i, 1]
+        x2 = out[i, 2]
+        for j in range(3):
+            out[i, j] = x0 * chart[b, 0, j] + x1 * chart[b, 1, j] + x2 * chart[b, 2, j]
+
+
+@njit(cache=True)
+def euler_from_rotation(lam, out):
+    """Euler angles (roll, pitch, yaw) of Λ_f (global -> body) with pitch in [−90°, 90°] and roll, yaw in
+    (−180°, 180°]. At pitch ±90° exactly (roll and yaw not separable) roll is set to 0."""
+    c = math.sqrt(lam[0, 0] * lam[0, 0] + lam[0, 1] * lam[0, 1])
+    out[1] = math.atan2(-lam[0, 2], c)
+    if c > 1e-12:
+        out[0] = math.atan2(lam[1, 2], lam[2, 2])
+        out[2] = math.atan2(lam[0, 1], lam[0, 0])
+    else:
+        out[0] = 0.0
+        out[2] = math.atan2(-lam[1, 0], lam[1, 1])
+
+
+@njit(cache=True)
+def rechart_body(b, hist_ang, chart, lam, lam0, cnew, tmp):
+    """Move body ``b`` to a new attitude chart centred on its current attitude: C ← Λ(ang⁰) (re-orthonormalised),
+    and each stored time level k gets the local angles of Λ(ang^k) C_newᵀ (so ang⁰ = 0 and the older levels
+    are small). The map between charts is smooth, so the Houbolt history stays a consistent sample of the
+    same motion."""
+    body_rotation(hist_ang[0, b], chart[b], lam0)
+    # Gram–Schmidt on the rows (keeps C a rotation to round-off over any number of re-charts)
+    for r in range(3):
+        for j in range(3):
+            cnew[r, j] = lam0[r, j]
+        for q in range(r):
+            d = cnew[r, 0] * cnew[q, 0] + cnew[r, 1] * cnew[q, 1] + cnew[r, 2] * cnew[q, 2]
+            for j in range(3):
+                cnew[r, j] -= d * cnew[q, j]
+        nrm = math.sqrt(cnew[r, 0] * cnew[r, 0] + cnew[r, 1] * cnew[r, 1] + cnew[r, 2] * cnew[r, 2])
+        for j in range(3):
+            cnew[r, j] /= nrm
+    for lv in range(2, -1, -1):
+        body_rotation(hist_ang[lv, b], chart[b], lam)
+        # local matrix in the new chart: Λ C_newᵀ
+        for i in range(3):
+            for j in range(3):
+                lam0[i, j] = lam[i, 0] * cnew[j, 0] + lam[i, 1] * cnew[j, 1] + lam[i, 2] * cnew[j, 2]
+        euler_from_rotation(lam0, tmp)
+        for i in range(3):
+            hist_ang[lv, b, i] = tmp[i]
+    for i in range(3):
+        hist_ang[0, b, i] = 0.0
+        for j in range(3):
+            chart[b, i, j] = cnew[i, j]
 
 
 @njit(cache=True)
@@ -404,7 +490,18 @@ def body_mass_blocks(b, bp, att, atr, arr):
 @njit(cache=True)
 def condense_body(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
                   mnode, fnode):
+    """Condense rigid body ``b`` onto its tow-point node ``a`` (all three rotations free): see ``_condense``."""
+    return _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
+                     mnode, fnode, False)
+
+
+@njit(cache=True)
+def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
+              mnode, fnode, reduced):
     """Condense rigid body ``b`` onto its tow-point node ``a`` (model.md 3.4, Schur complement).
+
+    ``reduced``: the body pitches only (roll and yaw held by constraint moments), so only the pitch row and
+    column of A_rr take part: A_rr⁻¹ is replaced by e_y e_yᵀ / A_rr,yy.
 
     On entry ``fb``/``mb`` hold the body-axis loads from :func:`body_loads`; ``tail_force`` (global) is
     the reaction of a series-tow tail cable at the aft tow point. Adds the rigid-body Coriolis and
@@ -440,7 +537,14 @@ def condense_body(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr,
     _cross(w[0], w[1], w[2], hvec[0], hvec[1], hvec[2], tmp3)
     for i in range(3):
         mb[i] -= tmp3[i]
-    if not _inv3(arr, arrinv):
+    if reduced:
+        if not arr[1, 1] > 0.0:
+            return False
+        for i in range(3):
+            for j in range(3):
+                arrinv[i, j] = 0.0
+        arrinv[1, 1] = 1.0 / arr[1, 1]
+    elif not _inv3(arr, arrinv):
         return False
     # X = A_rr⁻¹ A_rt (A_rt = A_trᵀ), y = A_rr⁻¹ M
     for i in range(3):
@@ -609,13 +713,13 @@ def _cross(a0, a1, a2, b0, b1, b2, out):
 
 
 @njit(cache=True)
-def place_aft_nodes(r, ang, body_node, body_aft_node, bp, lam):
-    """Aft tow points are rigidly carried by their body: r_aft = r_tp + Λ_fᵀ r_t."""
+def place_aft_nodes(r, ang, chart, body_node, body_aft_node, bp, lam):
+    """Aft tow points are rigidly carried by their body: r_aft = r_tp + Λᵀ r_t (Λ = Λ_f(ang) C)."""
     for b in range(body_node.shape[0]):
         c = body_aft_node[b]
         if c < 0:
             continue
-        rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
+        _chart_rotation(ang[b, 0], ang[b, 1], ang[b, 2], chart, b, lam)
         a = body_node[b]
         for i in range(3):
             r[c, i] = r[a, i] + lam[0, i] * bp[b, 26] + lam[1, i] * bp[b, 27] + lam[2, i] * bp[b, 28]
@@ -643,9 +747,10 @@ def node_reaction(c, r, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, t
 
 
 @njit(cache=True)
-def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0, bkc, scr, lam):
+def _rotational_stiffness(b, ang, chart, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0, bkc, scr, lam, reduced):
     """Diagonal estimates of −∂M_i/∂θ_i (stiffness) and −∂M_i/∂ω_i (damping) of the body loads, by
-    finite differences, clipped at zero. Used only to relax the body-angle update (convergence rate)."""
+    finite differences, clipped at zero. Used only to relax the body-angle update (convergence rate).
+    ``reduced``: pitch only (the roll and yaw entries are set to 0)."""
     vb = scr[0]
     f = scr[1]
     m = scr[2]
@@ -655,17 +760,21 @@ def _rotational_stiffness(b, ang, vnode, w, bp, btab_n, btab, rho, g, cur_b, m0,
     eps_a = 1e-5
     eps_w = 1e-4
     for i in range(3):
+        if reduced and i != 1:
+            bkc[b, i] = 0.0
+            bkc[b, 3 + i] = 0.0
+            continue
         for k in range(3):
             ang2[k] = ang[k]
             w2[k] = w[k]
         ang2[i] += eps_a
-        rotation_matrix(ang2[0], ang2[1], ang2[2], lam)
+        _chart_rotation(ang2[0], ang2[1], ang2[2], chart, b, lam)
         for k in range(3):
             vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
         body_loads(b, lam, vb, w, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
         kk = -(m[i] - m0[i]) / eps_a
         bkc[b, i] = kk if kk > 0.0 else 0.0
-        rotation_matrix(ang[0], ang[1], ang[2], lam)
+        _chart_rotation(ang[0], ang[1], ang[2], chart, b, lam)
         for k in range(3):
             vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
         w2[i] += eps_w
@@ -833,9 +942,10 @@ def _end_stop_force(a, ship, comp, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_se
 
 
 @njit(cache=True)
-def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0, out, scr):
+def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0, out, scr, planar):
     """D = −∂F/∂v of the body's hydrodynamic force (body axes) by finite differences. Used only as the
-    implicit-damping linearisation of the tow-point node (convergence rate, not the solution)."""
+    implicit-damping linearisation of the tow-point node (convergence rate, not the solution).
+    ``planar``: the lateral (body y = global y) column is not needed (set to 0)."""
     f = scr[1]
     m = scr[2]
     bd = scr[3]
@@ -843,6 +953,10 @@ def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0
     vmag = math.sqrt(vbody[0] ** 2 + vbody[1] ** 2 + vbody[2] ** 2)
     eps = 1e-6 * (1.0 + vmag)
     for j in range(3):
+        if planar and j == 1:
+            for i in range(3):
+                out[i, j] = 0.0
+            continue
         for k in range(3):
             v2[k] = vbody[k]
         v2[j] += eps
@@ -868,7 +982,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     maxit = int(settings[2])
     max_strain = settings[3]
     ang_tol = settings[4]
-    hist_r, hist_ang, tens_hist, top_react, cstate = state
+    # 2-D vertical-plane model (solver.planar): lateral node DOF and body roll/yaw frozen
+    planar = settings.shape[0] > 8 and settings[8] != 0.0
+    hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
     (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
      gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
      fb, mb, bdiag, react, bkc, bdmat, scr, flow) = ws
@@ -905,7 +1021,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     for b in range(nb):
         for i in range(3):
             angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
-    place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
+    place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
     for s in range(ns):
         tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
         tens[s] = tp if tp > 0.0 else 0.0
@@ -932,7 +1048,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 dang[b, i] = (11.0 * angs[b, i] - 18.0 * hist_ang[0, b, i] + 9.0 * hist_ang[1, b, i]
                               - 2.0 * hist_ang[2, b, i]) * i6dt
             lam = blam[b]
-            rotation_matrix(angs[b, 0], angs[b, 1], angs[b, 2], lam)
+            _chart_rotation(angs[b, 0], angs[b, 1], angs[b, 2], chart, b, lam)
             euler_rates_to_omega(angs[b], dang[b], omg[b])
             w = omg[b]
             for i in range(3):
@@ -940,15 +1056,17 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             zc = rs[a, 2] + lam[0, 2] * bp[b, 7] + lam[1, 2] * bp[b, 8] + lam[2, 2] * bp[b, 9]
             current_at(zc, cur_z, cur_v, cur_b)
             body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
+            reduced = planar or bp[b, 29] != 0.0
             if it == 1:
-                _rotational_stiffness(b, angs[b], vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33)
-                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr)
+                _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33,
+                                      reduced)
+                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
             c = body_aft_node[b]
             if c >= 0:
                 node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
                               mnode, fnode, react)
-            if not condense_body(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
-                                 tmp33b, bX[b], by[b], mnode, fnode):
+            if not _condense(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
+                             tmp33b, bX[b], by[b], mnode, fnode, reduced):
                 return FAIL_NAN, it, -1, 0.0
             for i in range(3):
                 bkc[b, 6 + i] = arr[i, i]
@@ -996,9 +1114,19 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 for i in range(3):
                     qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
                                             + tmp33b[i, 2] * tang[s, 2])
+
+        if planar:
+            # vertical-plane model: free nodes hold their lateral coordinate. The scenes it accepts have no
+            # x–y or y–z coupling in M̃ (no lateral tangent, velocity or body asymmetry), so the (x, z) rows
+            # of the 3-D solve are the plane's own solve (a separate 2×2 path measured slower)
+            for a in range(nn):
+                if node_kind[a] == FREE:
+                    acon[a, 1] = r_t[a, 1]
+                    for k in range(node_nseg[a]):
+                        qvec[a, k, 1] = 0.0
         # positions at the current tensions, and residuals
         _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
-        place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
+        place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
         tmax = 0.0
         for s in range(ns):
             p = seg_lo[s]
@@ -1062,7 +1190,11 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             for i in range(3):
                 tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
             omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
+            reduced = planar or bp[b, 29] != 0.0
             for i in range(3):
+                if reduced and i != 1:
+                    angs[b, i] = hist_ang[0, b, i]      # roll and yaw held
+                    continue
                 na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
                 # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
                 # of the fixed-point update that leaves the converged solution unchanged
@@ -1071,11 +1203,11 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 if not (dd <= dang_max):
                     dang_max = dd
                 angs[b, i] = na
-            if abs(angs[b, 1]) > 1.48:     # ~85 deg: Euler singularity ahead
+            if abs(angs[b, 1]) > 1.48:     # ~85 deg in the chart: only if re-charting (advance) could not keep up
                 return FAIL_ANGLE, it, b, maxd
         if not math.isfinite(dang_max):
             return FAIL_NAN, it, -1, maxd
-        place_aft_nodes(rs, angs, body_node, body_aft_node, bp, tmp33)
+        place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
         if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
             status = OK
             break
@@ -1253,14 +1385,19 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             comp, winch, wstate, t0, wave):
     """Advance ``n_steps`` steps of size ``dt``; ``top_path[k]`` is the vessel tow point at the end of step k.
 
-    A step whose Newton iteration fails is retried as 2, 4, … 2^max_cuts sub-steps with the Houbolt
-    history re-interpolated quadratically at the new spacing (model.md 5.7). ``counters`` accumulates
-    [steps, iterations, max iterations, step cuts]. With a winch, the top segment's unstretched length
+    ``state = (hist_r, hist_ang, tens_hist, top_react, cstate, chart)``: ``hist_ang`` holds each rigid body's
+    Euler angles at the last three time levels *relative to its chart* ``chart[b]`` (see ``body_rotation``);
+    before each step a body whose pitch in its chart exceeds ``settings[7]`` (default ``RECHART_PITCH``) is
+    re-charted (``rechart_body``), so the attitude has no singularity. ``settings[8]`` ≠ 0 selects the
+    vertical-plane model. A step whose Newton iteration fails is retried as 2, 4, … 2^max_cuts sub-steps
+    with the Houbolt history re-interpolated quadratically at the new spacing (model.md 5.7). ``counters``
+    accumulates [steps, iterations, max iterations, step cuts] and, if it has a fifth element, attitude
+    re-charts. With a winch, the top segment's unstretched length
     follows the payout (model.md 2.8); when it leaves [0.5, 1.5]·l_nom the loop stops with
     ``NEED_REMESH`` after that step so the caller can insert or remove a node.
     Returns (status, step index (failed, or last done for NEED_REMESH), element, max|δT|).
     """
-    hist_r, hist_ang, tens_hist, top_react, cstate = state
+    hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
     s_hist_r, s_hist_ang, s_tens, s_cstate = saved
     l0 = segp[0]
     max_cuts = int(settings[5])
@@ -1268,10 +1405,22 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     nb = hist_ang.shape[1]
     ns = tens_hist.shape[1]
     top_sub = np.empty(3)
+    rc_lam = np.empty((3, 3))
+    rc_lam0 = np.empty((3, 3))
+    rc_new = np.empty((3, 3))
+    rc_tmp = np.empty(3)
+    rc_pitch = settings[7] if settings.shape[0] > 7 else RECHART_PITCH
     wmode = int(winch[W_MODE])
     wseg = int(winch[W_SEG])
     flow = ws[40]
     for k in range(n_steps):
+        # moving attitude chart: a body whose local pitch has passed RECHART_PITCH restarts from a chart
+        # centred on its current attitude (between steps, so a failed step's retries stay in one chart)
+        for b in range(nb):
+            if abs(hist_ang[0, b, 1]) > rc_pitch:
+                rechart_body(b, hist_ang, chart, rc_lam, rc_lam0, rc_new, rc_tmp)
+                if counters.shape[0] > 4:
+                    counters[4] += 1
         _wave_flow(t0 + (k + 1) * dt, hist_r[0], hist_r[1], hist_r[2], wave, flow)
         dl = 0.0
         l_old = 0.0

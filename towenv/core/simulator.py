@@ -17,7 +17,7 @@ _CAUSES = {
     K.FAIL_NEWTON: "Newton iteration on the segment tensions did not converge (after step cuts)",
     K.FAIL_NAN: "a non-finite number appeared",
     K.FAIL_STRETCH: "non-physical stretch: strain above solver.max_strain",
-    K.FAIL_ANGLE: "body pitch reached ±85° (Euler-angle singularity)",
+    K.FAIL_ANGLE: "body pitch reached ±85° inside its attitude chart (re-charting could not keep up)",
 }
 
 
@@ -44,6 +44,7 @@ class Snapshot:
     winch: np.ndarray
     system: object = None
     l0: np.ndarray | None = None
+    chart: np.ndarray | None = None     # per-body attitude chart (None: identity, snapshots of older code)
 
 
 @dataclass
@@ -57,11 +58,19 @@ class SolverSettings:
     settle_time: float = 0.0
     angle_tolerance: float = 1e-5
     tension_solve: str = "tree"
+    # moving attitude chart: a body whose pitch in its chart exceeds this (rad) is re-charted before the
+    # next step (docs/model-notes.md "Body attitude"); 0 re-charts every step (most accurate, not
+    # bit-identical to the plain Euler-angle runs). Not a scene field: set it on ``Simulator.settings``.
+    rechart_pitch: float = K.RECHART_PITCH
+    planar: bool = False
 
     def array(self):
+        if not (0.0 <= self.rechart_pitch <= 1.2):
+            raise ValueError(f"rechart_pitch: must be within [0, 1.2] rad (got {self.rechart_pitch!r})")
         return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
                          self.angle_tolerance, self.max_step_cuts,
-                         1.0 if self.tension_solve == "as_published" else 0.0], float)
+                         1.0 if self.tension_solve == "as_published" else 0.0, self.rechart_pitch,
+                         1.0 if self.planar else 0.0], float)
 
 
 def load(scene, overrides=None):
@@ -102,6 +111,7 @@ class Simulator:
                 np.any(self.system.node_nseg > 2) or self.system.n_rigid + len(self.system.bodies) > 1):
             raise ValueError("solver.tension_solve: 'as_published' (the thesis recursion) handles a single chain "
                              "only (no junctions or series bodies)")
+        self._check_reduced_models()
         self.comp = np.zeros(16)
         self.winch = np.zeros(12)
         self.wstate = np.zeros(4)
@@ -110,6 +120,67 @@ class Simulator:
         self._setup_actuators()
         self._initial_state()
         self._initial = self.snapshot()
+
+    def _check_reduced_models(self):
+        """``solver.planar`` (vertical-plane model) and bodies with ``dof = "surge_heave_pitch"``: refuse what
+        they cannot represent, naming the field."""
+        sc = self.scene
+        reduced = [b.name for b in self.system.bodies if getattr(b, "rigid_index", -1) >= 0
+                   and self.system.bp[b.rigid_index, 29] != 0.0]
+        if not self.settings.planar and not reduced:
+            return
+        what = "solver.planar" if self.settings.planar else f"bodies {reduced!r}: dof = 'surge_heave_pitch'"
+        method = _get(_get(sc, "solver"), "method", "houbolt")
+        if method != "houbolt" or hasattr(self, "scheme"):
+            raise ValueError(f"{what}: the reduced models exist for the houbolt solver only (solver.method = "
+                             f"{getattr(self, 'scheme', method)!r})")
+        if not self.settings.planar:
+            return
+
+        def refuse(field, why):
+            raise ValueError(f"{field}: {why} — the vertical-plane model (solver.planar = true) needs a scene "
+                             f"without lateral excitation; use the 3-D model (solver.planar = false)")
+        s = self.system
+        if np.any(s.cur_v[:, 1] != 0.0):
+            refuse("current", f"the lateral (y) current component must be 0 (got {s.cur_v[:, 1].tolist()} m/s)")
+        vessel = _get(sc, "vessel")
+        if vessel is not None:
+            if float(_get(vessel, "heading_deg", 0.0) or 0.0) != 0.0:
+                refuse("vessel.heading_deg", f"must be 0 (the plane is the global x–z plane; got "
+                                             f"{_get(vessel, 'heading_deg')!r})")
+            from ..scene import TurnManoeuvre
+            for i, m in enumerate(_get(vessel, "manoeuvres", ()) or ()):
+                if isinstance(m, TurnManoeuvre):
+                    refuse(f"vessel.manoeuvres[{i}]", "a turn is lateral motion")
+            for i, e in enumerate(_get(vessel, "excitation", ()) or ()):
+                if _get(e, "axis", None) == "y":
+                    refuse(f"vessel.excitation[{i}].axis", "sway excitation ('y') is lateral motion")
+        sea = _get(sc, "sea")
+        if sea is not None:
+            if float(_get(sea, "heading_deg", 180.0)) % 180.0 != 0.0:
+                refuse("sea.heading_deg", f"must be 180 (head seas) or 0 (following seas) (got "
+                                          f"{_get(sea, 'heading_deg')!r})")
+            if _get(sea, "spreading_s") is not None:
+                refuse("sea.spreading_s", "a short-crested sea excites sway, roll and yaw")
+        for bm in s.bodies:
+            if bm.rigid_index < 0:
+                continue
+            p = s.bp[bm.rigid_index]
+            for name, k in (("cg", 5), ("cb", 8), ("aft_tow_point", 27)):
+                if p[k] != 0.0:
+                    refuse(f"bodies[{bm.name!r}].{name}", f"the lateral (y) offset must be 0 (got {p[k]!r} m)")
+            nh = int(s.btab_n[bm.rigid_index, 1])
+            tab = s.btab[bm.rigid_index]
+            cy0 = K.table_lookup(0.0, tab[4], tab[6], nh)
+            cn0 = K.table_lookup(0.0, tab[4], tab[7], nh)
+            if abs(cy0) > 1e-12 or abs(cn0) > 1e-12:
+                refuse(f"bodies[{bm.name!r}].horizontal_coefficients",
+                       f"side force and yaw moment at zero sideslip must be 0 (got {cy0!r}, {cn0!r})")
+        y0 = None
+        for node, pos in s.anchors.items():
+            y0 = self.path.position(np.array([0.0]))[0][1] if y0 is None else y0
+            if pos[1] != y0:
+                refuse("lines (anchor)", f"an anchor off the plane y = {y0!r} m (got y = {pos[1]!r} m)")
 
     _NO_WAVE = (np.zeros(1), np.ones(1), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1), np.zeros(2))
 
@@ -199,9 +270,10 @@ class Simulator:
         mk = MAX_SEGS_PER_NODE
         self.hist_r = np.zeros((3, nn, 3))
         self.hist_ang = np.zeros((3, nb, 3))
+        self.body_chart = np.tile(np.eye(3), (nb, 1, 1))
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
-        self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate)
+        self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate, self.body_chart)
         self._ws = (np.zeros((ns, 3)), np.zeros(ns), np.zeros((ns, 2, 3)), np.zeros((ns, 2, 3, 3)), np.zeros((ns, 3, 3)),
                     np.zeros((nn, 3, 3)), np.zeros((nn, 3, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)),
                     np.zeros((nn, mk, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)), np.zeros(ns), np.zeros((nn, mk, mk)),
@@ -213,7 +285,7 @@ class Simulator:
                     np.zeros((max(nb, 1), 3, 3)), np.zeros((6, 3)), np.zeros((nn, 3)))
         self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)), np.zeros(8))
         if not hasattr(self, "counters"):
-            self.counters = np.zeros(4, np.int64)
+            self.counters = np.zeros(5, np.int64)    # steps, iterations, max iterations, step cuts, re-charts
         self._args = (s.top_node, s.topo(), s.segp(), s.bodyp(), s.env())
 
     _COMP_MODES = {"passive": K.COMP_PASSIVE, "locked": K.COMP_LOCKED, "position": K.COMP_POSITION,
@@ -313,7 +385,8 @@ class Simulator:
         winch = self.winch[K.W_MODE] > 0
         return Snapshot(self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy(), self.top_react.copy(),
                         self.step_count, self.cstate.copy(), self.wstate.copy(), self.comp.copy(), self.winch.copy(),
-                        self.system if winch else None, self.system.l0.copy() if winch else None)
+                        self.system if winch else None, self.system.l0.copy() if winch else None,
+                        self.body_chart.copy())
 
     def restore(self, snap: Snapshot) -> None:
         if snap.system is not None and snap.system is not self.system:
@@ -323,6 +396,10 @@ class Simulator:
             self.system.l0[...] = snap.l0
         self.hist_r[...] = snap.hist_r
         self.hist_ang[...] = snap.hist_ang
+        if snap.chart is not None:
+            self.body_chart[...] = snap.chart
+        else:
+            self.body_chart[...] = np.eye(3)
         self.tens_hist[...] = snap.tens_hist
         self.top_react[...] = snap.top_react
         self.cstate[...] = snap.cstate
@@ -370,6 +447,7 @@ class Simulator:
             return
         new, node_map, seg_map, info = out
         old_r, old_ang, old_T = self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy()
+        old_chart = self.body_chart.copy()
         old_react = self.top_react.copy()
         self.system = new
         self._allocate()
@@ -386,6 +464,7 @@ class Simulator:
             else:
                 self.tens_hist[:, i] = old_T[:, info["split"][0]]
         self.hist_ang[...] = old_ang
+        self.body_chart[...] = old_chart
         self.top_react[...] = old_react
         self.winch[K.W_SEG] = new.line(self.winch_line).segments[0]
         self.winch[K.W_LNOM] = l_nom
@@ -504,6 +583,10 @@ class Simulator:
                 if len(cache) > 4:
                     cache.clear()
                 cache[b] = self.path.position((b * B + np.arange(B)) * self.settings.dt)
+                if self.settings.planar and np.ptp(cache[b][:, 1]) > 1e-9:
+                    cache.pop(b)
+                    raise ValueError("solver.planar: the tow-point path moves laterally (vessel motion from the "
+                                     "sea/RAOs or the motion record has sway, roll or yaw); use the 3-D model")
             j = step - b * B
             m = min(B - j, n - i)
             out[i:i + m] = cache[b][j:j + m]
@@ -609,25 +692,98 @@ class Simulator:
         return out
 
     def body_state(self, name):
+        """Position and velocity of the body's tow point (global), its attitude and body rates.
+
+        ``euler``: (roll, pitch, yaw) of the body's attitude (docs/scene-format.md convention). While the
+        body has never been re-charted (pitch never beyond ±60°) these are the integrated angles (yaw
+        continuous, it may exceed ±180° in turns); afterwards they are extracted from the attitude with
+        pitch in [−90°, 90°] and roll, yaw in (−180°, 180°]: a body pitched past the vertical shows pitch
+        folding back with roll and yaw jumping by 180° (the same attitude) — use ``rotation`` or
+        ``quaternion`` for a continuous attitude.
+        ``rotation``: R (body -> global: columns are the body axes x′, y′, z′ in global components);
+        ``quaternion``: (w, x, y, z) of R, w ≥ 0. ``omega``: body rates (p, q, r), body axes.
+        Point bodies: zero angles and rates, identity rotation."""
         bm = self.system.body(name)
         pos = self.positions[bm.node].copy()
         vel = self.velocities[bm.node].copy()
         if bm.rigid_index >= 0:
-            ang = self.hist_ang[0, bm.rigid_index].copy()
-            dang = (3 * self.hist_ang[0, bm.rigid_index] - 4 * self.hist_ang[1, bm.rigid_index]
-                    + self.hist_ang[2, bm.rigid_index]) / (2 * self.settings.dt)
+            b = bm.rigid_index
+            lam = np.empty((3, 3))
+            K.body_rotation(self.hist_ang[0, b], self.body_chart[b], lam)
+            if _is_identity(self.body_chart[b]):
+                ang = self.hist_ang[0, b].copy()      # never re-charted: the stored angles are the attitude
+            else:
+                ang = np.empty(3)
+                K.euler_from_rotation(lam, ang)
+            # body rates from the local (chart) angles: the chart is constant, so they are the true rates
+            dang = (3 * self.hist_ang[0, b] - 4 * self.hist_ang[1, b] + self.hist_ang[2, b]) / (2 * self.settings.dt)
             w = np.empty(3)
-            K.euler_rates_to_omega(ang, dang, w)
+            K.euler_rates_to_omega(self.hist_ang[0, b], dang, w)
+            rot = lam.T.copy()
         else:
             ang = np.zeros(3)
             w = np.zeros(3)
-        return {"position": pos, "velocity": vel, "euler": ang, "omega": w}
+            rot = np.eye(3)
+        return {"position": pos, "velocity": vel, "euler": ang, "omega": w, "rotation": rot,
+                "quaternion": quaternion_from_rotation(rot)}
 
     @property
     def stats(self):
         c = self.counters
         return {"steps": int(c[0]), "iterations": int(c[1]), "max_iterations": int(c[2]), "step_cuts": int(c[3]),
+                "recharts": int(c[4]),
                 "mean_iterations": float(c[1] / max(c[0], 1))}
+
+
+def quaternion_from_rotation(R) -> np.ndarray:
+    """Unit quaternion (w, x, y, z), w ≥ 0, of a rotation matrix R (Shepperd's method: no loss of
+    accuracy near 180°)."""
+    R = np.asarray(R, float)
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    k = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
+    if k == 0:
+        w = 0.5 * math.sqrt(max(1.0 + tr, 0.0))
+        q = np.array([w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)])
+    else:
+        i = k - 1
+        j, m = (i + 1) % 3, (i + 2) % 3
+        x = 0.5 * math.sqrt(max(1.0 + R[i, i] - R[j, j] - R[m, m], 0.0))
+        q = np.empty(4)
+        q[1 + i] = x
+        q[0] = (R[m, j] - R[j, m]) / (4 * x)
+        q[1 + j] = (R[j, i] + R[i, j]) / (4 * x)
+        q[1 + m] = (R[m, i] + R[i, m]) / (4 * x)
+    if q[0] < 0:
+        q = -q
+    return q / np.linalg.norm(q)
+
+
+def _is_identity(c) -> bool:
+    return c[0, 0] == 1.0 and c[1, 1] == 1.0 and c[2, 2] == 1.0
+
+
+def physical_attitude(chart, ang):
+    """Physical attitude from recorded chart-local angles (vectorised over leading axes): ``chart`` (..., 3, 3)
+    the body charts (``Simulator.body_chart``), ``ang`` (..., 3) the local Euler angles (``hist_ang[0]``).
+    Returns (euler (..., 3), R (..., 3, 3) body -> global), with the same rule as ``Simulator.body_state``:
+    where the chart is the identity the angles are passed through unchanged, elsewhere they are extracted
+    from R with pitch in [−90°, 90°]."""
+    chart = np.asarray(chart, float)
+    ang = np.asarray(ang, float)
+    b, a, g = ang[..., 0], ang[..., 1], ang[..., 2]
+    cb, sb, ca, sa, cg, sg = np.cos(b), np.sin(b), np.cos(a), np.sin(a), np.cos(g), np.sin(g)
+    loc = np.stack([np.stack([cg * ca, sg * ca, -sa], -1),
+                    np.stack([-sg * cb + cg * sa * sb, cg * cb + sg * sa * sb, ca * sb], -1),
+                    np.stack([cg * sa * cb + sg * sb, sg * sa * cb - cg * sb, ca * cb], -1)], -2)
+    lam = loc @ chart
+    c = np.hypot(lam[..., 0, 0], lam[..., 0, 1])
+    pitch = np.arctan2(-lam[..., 0, 2], c)
+    ok = c > 1e-12
+    roll = np.where(ok, np.arctan2(lam[..., 1, 2], lam[..., 2, 2]), 0.0)
+    yaw = np.where(ok, np.arctan2(lam[..., 0, 1], lam[..., 0, 0]), np.arctan2(-lam[..., 1, 0], lam[..., 1, 1]))
+    ident = (chart[..., 0, 0] == 1.0) & (chart[..., 1, 1] == 1.0) & (chart[..., 2, 2] == 1.0)
+    euler = np.where(ident[..., None], ang, np.stack([roll, pitch, yaw], -1))
+    return euler, np.swapaxes(lam, -1, -2)
 
 
 def time_step_guide(T_keep: float, scheme: str = "houbolt", tolerance: str = "1%") -> float:

@@ -375,7 +375,8 @@ def _vec(b, name, default):
 def _rigid_body_params(b) -> np.ndarray:
     """Layout: 0 mass, 1 volume, 2 area, 3 length, 4-6 r_G, 7-9 r_B, 10-12 I_G (principal),
     13-15 linear rotational damping, 16-18 quadratic rotational damping, 19 lift slope (per rad),
-    20-22 added mass, 23-25 added inertia, 26-28 aft tow point."""
+    20-22 added mass, 23-25 added inertia, 26-28 aft tow point, 29 reduced DOF flag (1: surge/heave/pitch,
+    roll and yaw held)."""
     p = np.zeros(BODY_PARAM)
     p[0] = float(_get(b, "mass"))
     p[1] = float(_get(b, "volume", 0.0))
@@ -390,6 +391,7 @@ def _rigid_body_params(b) -> np.ndarray:
     p[20:23] = _vec(b, "added_mass", [0, 0, 0])
     p[23:26] = _vec(b, "added_inertia", [0, 0, 0])
     p[26:29] = _vec(b, "aft_tow_point", [0, 0, 0])
+    p[29] = 1.0 if _get(b, "dof", "6dof") == "surge_heave_pitch" else 0.0
     return p
 
 

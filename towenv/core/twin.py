@@ -21,7 +21,8 @@ read) and never modify their inputs.
 Contents
 
 * :func:`current_np`, :func:`rotation_matrix_np`, :func:`euler_rates_to_omega_np`,
-  :func:`omega_dot_to_euler_acc_np` — environment and body kinematics (model.md 1.4)
+  :func:`omega_dot_to_euler_acc_np` — environment and body kinematics (model.md 1.4);
+  :func:`body_rotation_np`, :func:`attitude_euler_np`, :func:`rechart_np` — the moving attitude chart
 * :func:`segment_loads_np` — tangents, stretched lengths, Morison drag, drag damping, added mass (2.2–2.3, 5.2)
 * :func:`node_assembly_np` — node mass matrices, damping matrices, non-tension forces (2.2–2.3, point bodies)
 * :func:`body_loads_np`, :func:`body_mass_blocks_np` — rigid-body loads and mass blocks (3.2–3.3)
@@ -86,6 +87,36 @@ def rotation_matrix_np(roll, pitch, yaw):
 
     Built as the product of the three elementary (passive) rotations rather than the expanded formula."""
     return _rx(roll) @ _ry(pitch) @ _rz(yaw)
+
+
+def body_rotation_np(ang, chart=None):
+    """Λ = Λ_f(local angles) · C of a body stored in a moving attitude chart C (global -> chart components;
+    None = identity). See ``kernels.body_rotation``."""
+    lam = rotation_matrix_np(*ang)
+    return lam if chart is None else lam @ np.asarray(chart, float)
+
+
+def attitude_euler_np(lam):
+    """(roll, pitch, yaw) of Λ_f (global -> body), pitch in [−90°, 90°], via scipy's intrinsic Z-Y-X
+    decomposition of R = Λᵀ (body -> global = R_z(ψ) R_y(θ) R_x(φ) with active rotations, pitch nose down +)."""
+    from scipy.spatial.transform import Rotation
+    yaw, pitch, roll = Rotation.from_matrix(np.asarray(lam, float).T).as_euler("ZYX")
+    return np.array([roll, pitch, yaw])
+
+
+def rechart_np(hist_ang, chart, b):
+    """Twin of ``kernels.rechart_body``: a new chart C' = Λ(ang⁰) for body ``b`` and the local angles of every
+    stored level in it (level 0 becomes exactly 0). Returns new (hist_ang, chart) arrays; inputs unchanged."""
+    hist_ang = np.array(hist_ang, float)
+    chart = np.array(chart, float)
+    lams = [body_rotation_np(hist_ang[k, b], chart[b]) for k in range(3)]
+    u, _, vt = np.linalg.svd(lams[0])           # nearest rotation (the kernel uses Gram–Schmidt: same to round-off)
+    new = u @ vt
+    for k in range(3):
+        hist_ang[k, b] = attitude_euler_np(lams[k] @ new.T)
+    hist_ang[0, b] = 0.0
+    chart[b] = new
+    return hist_ang, chart
 
 
 def _euler_rate_matrix(ang):
@@ -423,6 +454,7 @@ class TwinStep:
     iterations: int = 0
     element: int = -1
     max_dT: float = 0.0
+    body_chart: np.ndarray | None = None
 
 
 def _settings_array(settings):
@@ -431,13 +463,14 @@ def _settings_array(settings):
     return np.asarray(settings, float)
 
 
-def place_aft_nodes_np(sys, r, angs):
-    """Aft tow points ride on their body: r_aft = r_tp + Λ_fᵀ r_t (model.md 3.5). Returns a new array."""
+def place_aft_nodes_np(sys, r, angs, chart=None):
+    """Aft tow points ride on their body: r_aft = r_tp + Λᵀ r_t (model.md 3.5), Λ = Λ_f(angs) C.
+    Returns a new array."""
     r = np.array(r, float)
     for b in range(sys.body_node.shape[0]):
         c = sys.body_aft_node[b]
         if c >= 0:
-            lam = rotation_matrix_np(*angs[b])
+            lam = body_rotation_np(angs[b], None if chart is None else chart[b])
             r[c] = r[sys.body_node[b]] + lam.T @ sys.bp[b, 26:29]
     return r
 
@@ -482,16 +515,16 @@ def geometric_stiffness_np(sys, seg: SegmentLoads, tens):
     return kg
 
 
-def rotational_stiffness_np(sys, b, ang, v_node, omega, cur_global, m0, eps_angle=1e-5, eps_rate=1e-4):
+def rotational_stiffness_np(sys, b, ang, v_node, omega, cur_global, m0, eps_angle=1e-5, eps_rate=1e-4, chart_b=None):
     """Diagonal estimates k_i = max(−∂M_i/∂θ_i, 0) and c_i = max(−∂M_i/∂ω_i, 0) of the body-load moments
     (forward differences about the moment ``m0`` at (θ, ω)); returns [k_β, k_α, k_γ, c_p, c_q, c_r].
     The Euler angle θ_i is perturbed with the tow-point velocity ``v_node`` held in global axes."""
     out = np.zeros(6)
-    lam0 = rotation_matrix_np(*ang)
+    lam0 = body_rotation_np(ang, chart_b)
     for i in range(3):
         ang2 = np.array(ang, float)
         ang2[i] += eps_angle
-        lam2 = rotation_matrix_np(*ang2)
+        lam2 = body_rotation_np(ang2, chart_b)
         _, m, _ = body_loads_np(sys, b, lam2, lam2 @ v_node, omega, cur_global)
         out[i] = max(-(m[i] - m0[i]) / eps_angle, 0.0)
         w2 = np.array(omega, float)
@@ -519,9 +552,15 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     """Twin of ``kernels.houbolt_step``: one Houbolt step (model.md 5.1–5.2) on copies of the state.
 
     ``sim_like`` provides ``system``, ``settings`` (SolverSettings or its ``array()``), ``hist_r`` (3, N, 3),
-    ``hist_ang`` (3, B, 3) and ``tens_hist`` (2, S) — a :class:`~towenv.core.simulator.Simulator` or a
-    previous :class:`TwinStep`. Nothing of it is modified. The step starts from the predictor
-    R* = 3R^t − 3R^{t−1} + R^{t−2} (tow point prescribed) and the tension guess max(2T^t − T^{t−1}, 0).
+    ``hist_ang`` (3, B, 3), ``tens_hist`` (2, S) and optionally ``body_chart`` (B, 3, 3; identity if absent:
+    the body attitude is Λ = Λ_f(hist_ang) C, :func:`body_rotation_np`) — a
+    :class:`~towenv.core.simulator.Simulator` or a previous :class:`TwinStep`. Re-charting happens between
+    steps (:func:`rechart_np`, as ``kernels.advance`` does). Reduced models as in the kernel: with
+    ``settings[8]`` (``solver.planar``) the free nodes keep their lateral coordinate (y row of M̃⁻¹
+    dropped) and every body pitches only; a body with ``bp[b, 29] = 1`` (``dof = "surge_heave_pitch"``)
+    pitches only (A_rr⁻¹ → e_y e_yᵀ/A_rr,yy, roll and yaw held). Nothing of it is modified. The step
+    starts from the predictor R* = 3R^t − 3R^{t−1} + R^{t−2} (tow point prescribed) and the tension guess
+    max(2T^t − T^{t−1}, 0).
     Per iteration:
 
     1. coefficients at the iterate r*: Houbolt velocities, segment and node loads, body loads with the
@@ -556,9 +595,15 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     hist_ang = np.array(sim_like.hist_ang, float)
     tens_hist = np.array(sim_like.tens_hist, float)
     old_react = np.array(getattr(sim_like, "top_react", np.zeros(3)), float)
+    chart = getattr(sim_like, "body_chart", None)
+    chart = np.tile(_I3, (sys.body_node.shape[0], 1, 1)) if chart is None else np.array(chart, float)
+    # reduced models: vertical plane (settings[8]) and pitch-only bodies (bp[:, 29])
+    planar = settings.shape[0] > 8 and settings[8] != 0.0
+    reduced = planar | (sys.bp[:, 29] != 0.0) if sys.bp.shape[0] else np.zeros(0, bool)
 
     def fail(status, it, elem, maxd):
-        return TwinStep(sys, sim_like.settings, hist_r, hist_ang, tens_hist, old_react, status, it, elem, maxd)
+        return TwinStep(sys, sim_like.settings, hist_r, hist_ang, tens_hist, old_react, status, it, elem, maxd,
+                        chart)
 
     nb = sys.body_node.shape[0]
     top = sys.top_node
@@ -572,7 +617,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     rs = 3.0 * hist_r[0] - 3.0 * hist_r[1] + hist_r[2]
     rs[top] = r_top_new
     angs = 3.0 * hist_ang[0] - 3.0 * hist_ang[1] + hist_ang[2]
-    rs = place_aft_nodes_np(sys, rs, angs)
+    rs = place_aft_nodes_np(sys, rs, angs, chart)
     tens = np.maximum(2.0 * tens_hist[0] - tens_hist[1], 0.0)     # linear extrapolation, T ≥ 0
     ea = sys.ea
     compliance = np.where(np.isinf(ea), 0.0, sys.l0 / np.where(np.isinf(ea), 1.0, ea))
@@ -593,14 +638,18 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             a = sys.body_node[b]
             P = body_params(sys, b)
             dang = houbolt_vel(angs[b], hist_ang[:, b], dt)
-            lam = rotation_matrix_np(*angs[b])
+            lam = body_rotation_np(angs[b], chart[b])
             w = euler_rates_to_omega_np(angs[b], dang)
             z_centroid = rs[a, 2] + (lam.T @ P["r_B"])[2]
             cur = current_np(z_centroid, sys.cur_z, sys.cur_v)
             F, M, _ = body_loads_np(sys, b, lam, lam @ vs[a], w, cur)
             if it == 1:
-                relax[b] = rotational_stiffness_np(sys, b, angs[b], vs[a], w, cur, M)
+                relax[b] = rotational_stiffness_np(sys, b, angs[b], vs[a], w, cur, M, chart_b=chart[b])
                 bdamp[b] = translational_damping_np(sys, b, lam, lam @ vs[a], w, cur, F)
+                if reduced[b]:
+                    relax[b, [0, 2, 3, 5]] = 0.0       # roll and yaw are held: not needed
+                if planar:
+                    bdamp[b][:, 1] = 0.0                 # no lateral velocity
             c = sys.body_aft_node[b]
             if c >= 0:
                 tail = lam @ node_reaction_np(sys, c, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
@@ -610,8 +659,14 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             I_o = A_rr - np.diag(P["added_inertia"])
             F = F - P["mass"] * np.cross(w, np.cross(w, P["r_G"]))
             M = M - np.cross(w, I_o @ w)
-            X = np.linalg.solve(A_rr, A_tr.T)
-            y = np.linalg.solve(A_rr, M)
+            if reduced[b]:
+                # pitch only: roll and yaw held by constraint moments, A_rr⁻¹ → e_y e_yᵀ / A_rr,yy
+                e_y = np.array([0.0, 1.0, 0.0])
+                X = np.outer(e_y, A_tr.T[1]) / A_rr[1, 1]
+                y = e_y * M[1] / A_rr[1, 1]
+            else:
+                X = np.linalg.solve(A_rr, A_tr.T)
+                y = np.linalg.solve(A_rr, M)
             A_eff = A_tt - A_tr @ X
             f_eff = F - A_tr @ y
             mnode[a] += lam.T @ A_eff @ lam
@@ -623,9 +678,14 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         Mt = mnode + lin
         minv = np.zeros_like(Mt)
         minv[free] = np.linalg.inv(Mt[free])
+        if planar:
+            # vertical plane: the lateral coordinate held (no y row; the accepted scenes have no x–y, y–z coupling)
+            minv[:, 1, :] = 0.0
         rhs_node = (np.einsum("aij,aj->ai", mnode, r_hist_term) + np.einsum("aij,aj->ai", lin, rs)
                     + hdt2 * fnode)
         acon = np.einsum("aij,aj->ai", minv, rhs_node)
+        if planar:
+            acon[free, 1] = hist_r[0][free, 1]
 
         def positions(T):
             out = rs.copy()
@@ -633,7 +693,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             out[free] = x[free]
             return out
 
-        rs = place_aft_nodes_np(sys, positions(tens), angs)
+        rs = place_aft_nodes_np(sys, positions(tens), angs, chart)
         # 3. residuals and Newton update
         ell = np.linalg.norm(rs[sys.seg_up] - rs[sys.seg_lo], axis=1)
         gres = ell - sys.l0 - compliance * tens
@@ -669,13 +729,15 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             # relaxed fixed-point update (diagonal implicit rotational stiffness and damping)
             factor = 1.0 + (hdt2 * relax[b, :3] + c11 * relax[b, 3:]) / arr_diag
             new_angs[b] = angs[b] + (plain - angs[b]) / factor
+            if reduced[b]:
+                new_angs[b, [0, 2]] = hist_ang[0, b, [0, 2]]      # roll and yaw held
             dang_max = max(dang_max, float(np.max(np.abs(new_angs[b] - angs[b]))))
             if abs(new_angs[b, 1]) > 1.48:
                 return fail(FAIL_ANGLE, it, b, maxd)
         if not math.isfinite(dang_max):
             return fail(FAIL_NAN, it, -1, maxd)
         angs = new_angs
-        rs = place_aft_nodes_np(sys, rs, angs)
+        rs = place_aft_nodes_np(sys, rs, angs, chart)
         if trace is not None:
             trace.append(dict(r=rs.copy(), tens=tens.copy(), angs=angs.copy(), max_dT=maxd, dang_max=dang_max,
                               tang=seg.tang.copy(), minv=minv.copy(), K=K, rhs=rhs.copy(), dT=dT.copy()))
@@ -695,4 +757,4 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     new_hist_r = np.stack([rs, hist_r[0], hist_r[1]])
     new_hist_ang = np.stack([angs, hist_ang[0], hist_ang[1]])
     new_tens = np.stack([tens, tens_hist[0]])
-    return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd)
+    return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd, chart)

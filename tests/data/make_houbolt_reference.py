@@ -1,0 +1,60 @@
+"""Regenerate ``houbolt_reference.npz``: short Houbolt trajectories stored from the kernel as it was
+*before* the moving attitude chart was added (commit 299a4cc, Euler angles only). It was made by running
+this script against that code:
+
+    cd <checkout of 299a4cc> && PYTHONPATH=. python <this worktree>/tests/data/make_houbolt_reference.py
+
+The attitude test (tests/test_attitude.py) checks that the current kernel reproduces the trajectories bit
+for bit when no body re-charts (every body's pitch stays below the re-chart threshold in these runs).
+
+Do not regenerate it with a changed kernel unless the change is meant to alter the results.
+"""
+from pathlib import Path
+
+import numpy as np
+
+import towenv
+
+CASES = {
+    # scene, overrides, steps
+    "two_part_tow_1": ({}, 300),
+    "series_multitow": ({}, 200),
+    "hover_deep_tow": ({}, 300),
+    # validation case 3b, SS6, locked compensator, cg-mapped towfish, seed 1: snap loads; in the first 40 s the
+    # towfish pitch stays below the 30° re-chart threshold (the old code stopped at 46.4 s with the ±85° limit)
+    "hover_ss6_locked_cg": ({}, 2000),
+}
+
+
+def hover_ss6_locked_cg():
+    import tempfile
+
+    from towenv.validation import hover as H
+    rao = H._rao_csv(tempfile.mkdtemp(), H.deck_gain())
+    return H.cg_mapped(H._comp_scene(rao, 6, "locked", 0.0, 0.0, 40.0, seed=1))
+
+
+def run(scene, overrides, steps):
+    sim = towenv.Simulator(hover_ss6_locked_cg() if scene == "hover_ss6_locked_cg" else scene, **overrides)
+    sim.advance_steps(steps)
+    return sim
+
+
+def main():
+    out = {}
+    for scene, (ov, steps) in CASES.items():
+        sim = run(scene, ov, steps)
+        out[f"{scene}::hist_r"] = sim.hist_r.copy()
+        out[f"{scene}::hist_ang"] = sim.hist_ang.copy()
+        out[f"{scene}::tens_hist"] = sim.tens_hist.copy()
+        out[f"{scene}::top_react"] = sim.top_react.copy()
+        out[f"{scene}::counters"] = sim.counters.copy()
+        out[f"{scene}::steps"] = np.array(steps)
+        print(scene, sim.system.n_rigid, "rigid bodies, max |pitch| (deg)",
+              np.degrees(np.abs(sim.hist_ang[0, :, 1])).max() if sim.system.n_rigid else None, sim.stats)
+    np.savez_compressed(Path(__file__).with_name("houbolt_reference.npz"), **out)
+    print("towenv from", towenv.__file__)
+
+
+if __name__ == "__main__":
+    main()
