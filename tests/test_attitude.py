@@ -338,9 +338,6 @@ def test_hover_ss6_locked_cg_mapped_runs_700_s():
     assert np.all(np.isfinite(sim.hist_r))
 
 
-@pytest.mark.xfail(strict=True, reason="towenv/core/run.py's fast Recorder stores hist_ang without the body "
-                   "charts (owned elsewhere; the lead applies the Recorder patch from the attitude-chart report, "
-                   "then remove this marker)")
 def test_recorded_result_reports_the_physical_attitude():
     from towenv.core.run import Recorder
 

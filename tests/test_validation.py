@@ -93,9 +93,6 @@ def test_hover_linearised_model_matches_time_domain_while_taut(quick):
     assert "SS5/b-tuned" in lc and lc["SS5/b-tuned"]["Q_13"] > 0
 
 
-@pytest.mark.xfail(reason="known problem (docs/validation.md, problem 3): with the drag-only Hover towfish the "
-                          "locked SS5 run can reach the ±85° Euler-angle limit under snap loading before 300 s of "
-                          "record, so the claim cannot be evaluated; needs a quaternion attitude", strict=False)
 def test_hover_locked_compensator_transmits_more_heave_than_damping_tuned(quick):
     case = quick[0]["cases"]["hover"]
     c = claim(case, "A locked compensator transmits more fish heave than the damping-tuned one")

@@ -89,8 +89,8 @@ def _gather_arrays(sim, body, inv_seg):
     if sim.winch[K.W_MODE] > 0:
         wsegs = np.asarray(s.line(sim.winch_line).segments, np.int64)
     idx = np.array([int(s.top_node), int(bm.node), int(bm.rigid_index), comp_node], np.int64)
-    return (sim.hist_r, sim.hist_ang, sim.tens_hist, sim.top_react, sim.cstate, sim.comp, sim.winch, sim.wstate,
-            s.l0, idx, wsegs, np.ascontiguousarray(inv_seg, dtype=np.float64))
+    return (sim.hist_r, sim.hist_ang, sim.body_chart, sim.tens_hist, sim.top_react, sim.cstate, sim.comp, sim.winch,
+            sim.wstate, s.l0, idx, wsegs, np.ascontiguousarray(inv_seg, dtype=np.float64))
 
 
 def _signature(sim):
@@ -102,7 +102,7 @@ def _signature(sim):
 # ----------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c):
-    hist_r, hist_ang, tens_hist, top_react, cstate, comp, winch, wstate, l0, idx, wsegs, inv_seg = g
+    hist_r, hist_ang, chart, tens_hist, top_react, cstate, comp, winch, wstate, l0, idx, wsegs, inv_seg = g
     top = idx[0]
     node = idx[1]
     ri = idx[2]
@@ -124,9 +124,16 @@ def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c):
         for i in range(3):
             w3a[i] = hist_ang[0, ri, i]
             w3b[i] = (3.0 * hist_ang[0, ri, i] - 4.0 * hist_ang[1, ri, i] + hist_ang[2, ri, i]) / (2.0 * dt)
-        K.euler_rates_to_omega(w3a, w3b, w3c)
-        out[M_PITCH] = w3a[1]
+        K.euler_rates_to_omega(w3a, w3b, w3c)      # body rates: independent of the attitude chart
         out[M_PITCH_RATE] = w3c[1]
+        c = chart[ri]
+        if c[0, 0] == 1.0 and c[1, 1] == 1.0 and c[2, 2] == 1.0:
+            out[M_PITCH] = w3a[1]
+        else:                                       # re-charted body: pitch of the physical attitude
+            lam = np.empty((3, 3))
+            K.body_rotation(w3a, c, lam)
+            K.euler_from_rotation(lam, w3b)
+            out[M_PITCH] = w3b[1]
     else:
         out[M_PITCH] = 0.0
         out[M_PITCH_RATE] = 0.0
@@ -177,8 +184,8 @@ def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c):
 
 @njit(cache=True)
 def _copy_step(item, g, n, dt, tops, t0, kind, u0, u1, ref, step_count, out, res):
-    comp = g[5]
-    winch = g[6]
+    comp = g[6]
+    winch = g[7]
     if kind == ACT_COMP_GAINS:
         comp[K.C_K] = u0
         comp[K.C_B] = u1

@@ -118,6 +118,7 @@ class Recorder:
             self.bnodes = np.array([b.node for b in s.bodies], int)
             self.RB = np.zeros((n, 3, len(self.bnodes), 3))
             self.A = np.zeros((n, 3, s.n_rigid, 3))
+            self.C = np.zeros((n, s.n_rigid, 3, 3))
             self.T = np.zeros((n, s.n_segments))
 
     def record(self):
@@ -128,6 +129,7 @@ class Recorder:
             self.R[i] = sim.hist_r[0]
             self.RB[i] = sim.hist_r[:, self.bnodes]
             self.A[i] = sim.hist_ang
+            self.C[i] = sim.body_chart
             self.T[i] = sim.tens_hist[0]
             self.top_force[i] = sim.top_react
             if self.actuators:
@@ -163,6 +165,7 @@ class Recorder:
     def _fast_finish(self):
         """Turn the raw state records into body and line time series (vectorised)."""
         from .kernels import euler_rates_to_omega
+        from .simulator import physical_attitude
         n = self.n
         s = self.sim.system
         dt = self.sim.dt
@@ -173,7 +176,7 @@ class Recorder:
             d["velocity"][:n] = (3 * rb[:, 0] - 4 * rb[:, 1] + rb[:, 2]) / (2 * dt)
             if bm.rigid_index >= 0:
                 a = self.A[:n, :, bm.rigid_index]
-                d["euler"][:n] = a[:, 0]
+                d["euler"][:n] = physical_attitude(self.C[:n, bm.rigid_index], a[:, 0])[0]
                 dang = (3 * a[:, 0] - 4 * a[:, 1] + a[:, 2]) / (2 * dt)
                 w = np.empty(3)
                 for i in range(n):
