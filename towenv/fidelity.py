@@ -350,8 +350,10 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     for dt in sorted(set(float(x) for x in dt_candidates) | {FINE_DT}):
         s, _ = pred.stats(1.0, dt)
         d_dt[dt] = {k: _ratio_dev(s[k], cont_1[k]) for k in used}
-    why_not_planar = lateral_excitation(sc, sea) if allow_planar else "not allowed"
-    planar = why_not_planar is None and _planar_supported()
+    why_not_planar = lateral_excitation(sc, sea) if allow_planar else "2-D not allowed by the caller"
+    if why_not_planar is None:
+        why_not_planar = _planar_refusal(sc)
+    planar = why_not_planar is None
     fine_segs = scaled_segments(sc, FINE_SEGMENT_FACTOR)
     fine_cost = step_cost(_n_nodes(fine_segs), FINE_DT)
     cands = []
@@ -403,13 +405,19 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     return best
 
 
-#: wall time of the 2-D model relative to 3-D at equal settings (scripts/fidelity_check.py measures it)
-PLANAR_COST = 1.0
+#: wall time of the 2-D model relative to 3-D at equal settings: 1.18–1.27× faster on two_part_tow_1,
+#: conventional_tow and hover_deep_tow (docs/model-notes.md "Reduced models")
+PLANAR_COST = 0.8
 
 
-def _planar_supported() -> bool:
-    from .scene import Solver
-    return "planar" in getattr(Solver, "model_fields", {})
+def _planar_refusal(scene) -> str | None:
+    """Why the simulator refuses ``solver.planar`` for this scene (its own checks), or None."""
+    from .core.simulator import Simulator
+    try:
+        Simulator(scene.with_overrides({"solver.planar": True}))
+    except ValueError as exc:
+        return str(exc).split(" — ")[0]
+    return None
 
 
 def step_cost(n_nodes: int, dt: float) -> float:
@@ -425,7 +433,7 @@ DEFAULT_TOLERANCE = 0.05
 
 
 def configure(scene, sea_state=None, tolerance: float | None = None, *, dt_candidates=DT_CANDIDATES,
-              overrides=None):
+              overrides=None, allow_planar: bool = True):
     """Apply :func:`select` where the user did not fix the settings; returns ``(scene, Fidelity or None)``.
 
     * ``tolerance`` given, or the scene sets ``solver.fidelity``: Δt, the segment counts and 2-D/3-D are
@@ -449,7 +457,7 @@ def configure(scene, sea_state=None, tolerance: float | None = None, *, dt_candi
         dt_fixed = "dt" in ov or "solver.dt" in ov
     try:
         ch = select(sc, sea_state, tol if full else DEFAULT_TOLERANCE, allow_linear=False,
-                    dt_candidates=dt_candidates, fixed_segments=not full)
+                    dt_candidates=dt_candidates, fixed_segments=not full, allow_planar=allow_planar and full)
     except (ValueError, FloatingPointError) as exc:   # LinearisationError is a ValueError
         if full:
             raise ValueError(f"solver.fidelity: automatic fidelity selection is not possible for scene "

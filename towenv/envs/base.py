@@ -126,7 +126,8 @@ class TowEnv(gym.Env):
             base = base.with_overrides(dict(scene_overrides))
         self.base_scene = self._prepare_scene(base)
         self.fidelity = None
-        dt = self._resolve_time_step(dt, fidelity, heading_deg)
+        dt = self._resolve_time_step(dt, fidelity, heading_deg,
+                                     planar_ok=heading_spread_deg == 0 and sea_generator is None)
         self.physics_dt = float(dt)
         self.substeps = max(1, int(round(1.0 / (control_hz * dt))))
         if abs(self.substeps * dt * control_hz - 1.0) > 1e-6:
@@ -189,11 +190,12 @@ class TowEnv(gym.Env):
         return self._row_dict(self._rows.stepper.M[self._row], self._rows.prev_action[self._row])
 
     # ------------------------------------------------------------------ subclass hooks
-    def _resolve_time_step(self, dt, fidelity, heading_deg):
+    def _resolve_time_step(self, dt, fidelity, heading_deg, planar_ok=False):
         """Physics Δt: ``dt`` if given; else automatic fidelity selection (towenv.fidelity, docs/fidelity.md)
         over the divisors of the control period — Δt, segments and 2-D/3-D with ``fidelity`` (or the scene's
         ``solver.fidelity``), Δt alone when the scene does not set ``solver.dt``; else the scene's Δt. The
-        choice is made once, for the middle sea state of ``sea_codes`` (``self.fidelity`` records it)."""
+        choice is made once, for the middle sea state of ``sea_codes`` (``self.fidelity`` records it); 2-D only
+        with a fixed head/following heading (``heading_spread_deg = 0``) and the default sea generator."""
         if dt is not None:
             return float(dt)
         sc = self.base_scene
@@ -208,7 +210,7 @@ class TowEnv(gym.Env):
         # the linearised predictor has no winch (payout remeshes): choose on the scene without it
         probe = sc.with_overrides({"winch": None}) if getattr(sc, "winch", None) is not None else sc
         try:
-            _, choice = configure(probe, sea, fidelity, dt_candidates=cands or (period,))
+            _, choice = configure(probe, sea, fidelity, dt_candidates=cands or (period,), allow_planar=planar_ok)
         except ValueError:
             if fidelity is not None:
                 raise
