@@ -1,7 +1,7 @@
 """Check automatic fidelity selection (towenv.fidelity.select) against the fine default in the time domain.
 
 For every case (scene × excitation) and tolerance, ``select`` picks a configuration; both it and the fine
-default (Houbolt, Δt = 0.01 s, twice the scene's segments, 3-D) are simulated with the same sea seed, and
+default (Houbolt, Δt = 0.01 s or the scene's smaller Δt, twice the scene's segments, 3-D) are simulated with the same sea seed, and
 the relative error of the fish's heave and pitch standard deviations (∝ significant amplitudes) is
 measured. *Build* cases were used to set ``towenv.fidelity.SAFETY``; *held-out* cases were not looked at
 while building it. Writes docs/fidelity.md (and a figure) — one command:
@@ -39,7 +39,8 @@ HEAVE8 = {"vessel.speed": 2.0,
 
 # (label, scene, overrides, role). "build": used to set SAFETY; "tuned": seen when a rule was added after a
 # check run missed — the slack rule (SLACK_NONLINEAR / SAFETY_SLACK) after two_part_tow_2, the flow rule
-# (FLOW_MARGIN) after hover_deep_tow — so no longer held out; "held-out": not run before the rules were fixed.
+# (FLOW_MARGIN) after hover_deep_tow, the series-tow step cap (SERIES_MAX_DT, a known limitation) after
+# series_multitow ran slower than the fine default — so no longer held out; "held-out": not run before the rules were fixed.
 CASES = [
     ("two_part_tow_1 (Table 4.1 sinusoid)", "two_part_tow_1", {}, "build"),
     ("two_part_coastal_ss4 (SS4 head sea)", "two_part_coastal_ss4", {}, "build"),
@@ -56,8 +57,8 @@ CASES = [
     ("parallel_multitow, coastal SS3", "parallel_multitow", sea(3), "held-out"),
     ("conventional_tow, coastal SS4 following sea", "conventional_tow", sea(4, 0.0), "held-out"),
     ("two_part_tow_1, coastal SS3", "two_part_tow_1", {**sea(3), "vessel.excitation": None}, "held-out"),
-    ("series_multitow, coastal SS3", "series_multitow", sea(3), "held-out"),
-    ("srivastava_towed_array, coastal SS3", "srivastava_towed_array", sea(3), "held-out"),
+    ("series_multitow, coastal SS3", "series_multitow", sea(3), "tuned"),
+    ("two_part_tow_2, coastal SS5", "two_part_tow_2", sea(5), "held-out"),
     ("two_part_tow_2, coastal SS3 following sea", "two_part_tow_2", sea(3, 0.0), "held-out"),
     ("conventional_tow at 2 m/s, coastal SS4", "conventional_tow", {**sea(4), "vessel.speed": 2.0}, "held-out"),
 ]
@@ -97,7 +98,7 @@ def main(argv=None):
     for label, name, ov, role in cases:
         base = load(name).with_overrides(ov) if ov else load(name)
         fish = fish_name(base)
-        fine_ov = {"solver.dt": F.FINE_DT}
+        fine_ov = {"solver.dt": F.fine_time_step(base)}
         for ln, n in F.scaled_segments(base, F.FINE_SEGMENT_FACTOR).items():
             fine_ov[f"lines.{ln}.segments"] = list(n) if isinstance(n, tuple) else n
         try:
@@ -136,11 +137,12 @@ def main(argv=None):
                   f" ({'ok' if rec['ok'] else 'MISSED'}), speed-up {rec['speedup']:.1f}×", flush=True)
     total = time.perf_counter() - wall0
     write_doc(args.doc, rows, total, duration, t_start, args.quick)
-    held = [r for r in rows if r["role"] == "held-out" and "ok" in r]
+    held = [r for r in rows if r["role"] == "held-out" and r.get("tol") is not None]
     if held:
-        frac = np.mean([r["ok"] for r in held])
-        sp = np.median([r["speedup"] for r in held])
-        print(f"held-out: {100 * frac:.0f} % within tolerance ({len(held)} runs), median speed-up {sp:.1f}×")
+        frac = np.mean([bool(r.get("ok", False)) for r in held])
+        sp = np.median([r["speedup"] for r in held if "speedup" in r])
+        print(f"held-out: {100 * frac:.0f} % within tolerance ({len(held)} runs, failures count as misses), "
+              f"median speed-up {sp:.1f}×")
 
 
 def write_doc(path, rows, total, duration, t_start, quick):
@@ -151,20 +153,39 @@ def write_doc(path, rows, total, duration, t_start, quick):
               "How the error" + F.__doc__.split("How the error", 1)[1].strip(), ""]
     lines += ["## Result", ""]
     for name in ("held-out", "tuned", "build"):
-        grp = [r for r in rows if r["role"] == name and "ok" in r]
+        grp = [r for r in rows if r["role"] == name and r.get("tol") is not None]   # failed runs count as misses
+        timed = [r for r in grp if "speedup" in r]
         if grp:
-            frac = np.mean([r["ok"] for r in grp])
-            sp = np.median([r["speedup"] for r in grp])
+            frac = np.mean([bool(r.get("ok", False)) for r in grp])
+            nfail = sum(1 for r in grp if "ok" not in r)
+            sp = np.median([r["speedup"] for r in timed]) if timed else float("nan")
             lines.append(f"* **{name}** cases: the chosen configuration met the tolerance in "
-                         f"**{100 * frac:.0f} %** of {len(grp)} runs; median speed-up over the fine default "
-                         f"**{sp:.1f}×** (min {min(r['speedup'] for r in grp):.1f}×).")
+                         f"**{100 * frac:.0f} %** of {len(grp)} runs ({nfail} of them failed to run, counted as "
+                         f"misses); median speed-up over the fine default **{sp:.1f}×** "
+                         f"(min {min(r['speedup'] for r in timed):.1f}×, max {max(r['speedup'] for r in timed):.1f}×).")
+    held = [r for r in rows if r["role"] == "held-out" and r.get("tol") is not None]
+    if held:
+        frac = np.mean([bool(r.get("ok", False)) for r in held])
+        sps = [r["speedup"] for r in held if "speedup" in r]
+        sp = np.median(sps)
+        n5 = sum(1 for x in sps if x >= 5.0)
+        lines += ["", f"**Goals (issue 5, held-out cases):** within tolerance in ≥ 90 % of cases — "
+                      f"{'**met**' if frac >= 0.9 else '**not met**'} ({100 * frac:.0f} %); ≥ 5× faster than the fine "
+                      f"default — {'**met**' if sp >= 5.0 else '**not met**'} on the median ({sp:.2f}×; {n5} of "
+                      f"{len(sps)} runs ≥ 5×). Where the choice is slow it is because the tolerance or a rule (slack, "
+                      "series tow) forbids a coarser model, or because the cost model (nodes/Δt and the Newton "
+                      "iterations' growth with Δt) misjudges fixed per-step costs such as the vessel motion.", ""]
+    skipped = [r for r in rows if r.get("tol") is None]
+    for r in skipped:
+        lines.append(f"* not evaluated: {r['case']} — {r['error']}")
     lines += ["", f"Each run: {duration:g} s simulated, statistics from t = {t_start:g} s; error = largest relative "
               "difference of the fish heave and pitch standard deviations from the fine default's, same seed.", "",
               "| case | role | tol | chosen | predicted | measured | ok | speed-up |",
               "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "err" not in r:
-            lines.append(f"| {r['case']} | {r['role']} | {r['tol']} | {r.get('error', '')} | | | ✗ | |")
+            tol = f"{100 * r['tol']:g} %" if r.get("tol") is not None else ""
+            lines.append(f"| {r['case']} | {r['role']} | {tol} | {r.get('error', '')} | | | ❌ | |")
             continue
         lines.append(f"| {r['case']} | {r['role']} | {100 * r['tol']:g} % | {r['choice'].split('; predicted')[0]} | "
                      f"{100 * r['pred']:.2g} % | {100 * r['err']:.2g} % | {'✅' if r['ok'] else '❌'} | "

@@ -77,7 +77,7 @@ def test_rules_slack_and_nonlinear_flow():
     assert "slack" in ch.reason and ch.segment_factor >= 1.0
     # the deep tow at U = 0: the fish's incidence flips, the linear prediction does not apply
     ch = F.select("hover_deep_tow", tolerance=0.1)
-    assert ch.dt == F.FINE_DT and ch.segment_factor == F.FINE_SEGMENT_FACTOR
+    assert ch.dt == F.fine_time_step(load("hover_deep_tow")) and ch.segment_factor == F.FINE_SEGMENT_FACTOR
     assert "strongly nonlinear" in ch.reason
 
 
@@ -119,7 +119,7 @@ def test_held_out_case_meets_tolerance_in_the_time_domain():
     tol = 0.05
     ch = F.select(sc, tolerance=tol)
     assert ch.relative_cost < 0.5
-    fine = {"solver.dt": F.FINE_DT}
+    fine = {"solver.dt": F.fine_time_step(sc)}
     for name, n in F.scaled_segments(sc, F.FINE_SEGMENT_FACTOR).items():
         fine[f"lines.{name}.segments"] = n
     a = simulate(sc.with_overrides(fine), 200.0)
@@ -129,3 +129,31 @@ def test_held_out_case_meets_tolerance_in_the_time_domain():
         sa = np.std(get(a)[a.t > 60])
         sb = np.std(get(b)[b.t > 60])
         assert abs(sb / sa - 1) <= tol, (key, sa, sb, ch.summary())
+
+
+def test_environment_uses_fidelity_when_asked():
+    gym = pytest.importorskip("gymnasium")
+    import towenv  # noqa: F401  (registers the ids)
+    env = gym.make("towenv/CompensatorGains-v0").unwrapped
+    assert env.fidelity is None and env.physics_dt == 0.05        # the default scene sets solver.dt
+    env = gym.make("towenv/CompensatorGains-v0", fidelity=0.1).unwrapped
+    ch = env.fidelity
+    assert ch is not None and ch.error <= 0.1 and not ch.planar   # random headings: 3-D
+    assert env.physics_dt == ch.dt
+    assert abs(round(env.dt / env.physics_dt) * env.physics_dt - env.dt) < 1e-12
+    obs, _ = env.reset(seed=1)
+    obs, *_ = env.step(env.action_space.sample())
+    assert np.all(np.isfinite(obs))
+    with pytest.raises(ValueError, match="fidelity"):
+        gym.make("towenv/CompensatorGains-v0", fidelity=2.0)
+
+
+def test_cli_fidelity(tmp_path):
+    from towenv.cli import main
+    out = tmp_path / "o"
+    assert main(["simulate", "two_part_tow_1", "--duration", "12", "--fidelity", "0.1", "--out", str(out),
+                 "--no-plots", "--quiet"]) == 0
+    from towenv.core.result import Result
+    assert "Houbolt" in Result.load(out / "result.npz").meta["fidelity"]
+    assert main(["simulate", "peer_deck", "--duration", "2", "--fidelity", "0.1", "--out", str(out),
+                 "--no-plots", "--quiet"]) == 2      # nothing excites it: a clear error, not a traceback

@@ -3,7 +3,7 @@
 ``select(scene, sea_state, tolerance)`` returns a :class:`Fidelity`: the time step, the segment counts per
 line, 2-D (vertical plane) or 3-D, and nonlinear time domain (Houbolt) or the linearised frequency-domain
 model, with the predicted relative error of the fish's heave and pitch statistics against the *fine
-default* (Houbolt, Δt = 0.01 s, twice the scene's segments, 3-D) and the predicted cost relative to it.
+default* (Houbolt, Δt = 0.01 s or the scene's Δt if smaller, twice the scene's segments, 3-D) and the predicted cost relative to it.
 
 How the error is predicted (no time-domain run is needed; a selection takes tens of milliseconds):
 
@@ -52,6 +52,14 @@ SAFETY_SLACK = 2.5
 #: linearised error prediction to apply (at U ≈ 0 the body's incidence flips through ±90° every cycle and
 #: its pitch is not a linear function of the motion — docs/linear.md "where it fails")
 FLOW_MARGIN = 2.0
+#: largest Δt offered for series tows (bodies with an aft tow point)
+SERIES_MAX_DT = 0.02
+
+
+def fine_time_step(scene) -> float:
+    """Δt of the fine default: :data:`FINE_DT`, or the scene's own ``solver.dt`` if that is smaller
+    (model-scale scenes, e.g. the channel runs, are written with millisecond steps)."""
+    return min(FINE_DT, float(scene.solver.dt))
 
 
 def houbolt_operators(omega, dt):
@@ -347,7 +355,16 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         s, _ = pred.stats(float(f), None) if f != 1.0 else (cont_1, None)
         d_seg[float(f)] = {k: _ratio_dev(s[k], cont_ref[k]) for k in used}
     d_dt = {}
-    for dt in sorted(set(float(x) for x in dt_candidates) | {FINE_DT}):
+    fine_dt = fine_time_step(sc)
+    series = any(getattr(b, "aft_tow_point", None) is not None for b in sc.bodies)
+    if series:
+        # series tows: the aft-tow-point coupling needs step cuts above ~0.02 s (README "Status"), which the
+        # cost model does not see
+        dt_candidates = tuple(d for d in dt_candidates if d <= SERIES_MAX_DT) or (min(fine_dt, SERIES_MAX_DT),)
+    if dt_candidates is DT_CANDIDATES and fine_dt < min(DT_CANDIDATES):
+        # model-scale scenes: also try small multiples of the scene's own step
+        dt_candidates = tuple(sorted(set(DT_CANDIDATES) | {fine_dt * m for m in (1, 2, 3, 5)}))
+    for dt in sorted(set(float(x) for x in dt_candidates) | {fine_dt}):
         s, _ = pred.stats(1.0, dt)
         d_dt[dt] = {k: _ratio_dev(s[k], cont_1[k]) for k in used}
     why_not_planar = lateral_excitation(sc, sea) if allow_planar else "2-D not allowed by the caller"
@@ -355,14 +372,14 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         why_not_planar = _planar_refusal(sc)
     planar = why_not_planar is None
     fine_segs = scaled_segments(sc, FINE_SEGMENT_FACTOR)
-    fine_cost = step_cost(_n_nodes(fine_segs), FINE_DT)
+    fine_cost = step_cost(_n_nodes(fine_segs), fine_dt)
     cands = []
     for f in segment_factors:
         segs = scaled_segments(sc, float(f))
         for dt in dt_candidates:
             dt = float(dt)
             seg_part = 0.0 if fixed_segments else 1.0
-            err = {k: safety * (seg_part * abs(d_seg[float(f)][k]) + abs(d_dt[dt][k] - d_dt[FINE_DT][k]))
+            err = {k: safety * (seg_part * abs(d_seg[float(f)][k]) + abs(d_dt[dt][k] - d_dt[fine_dt][k]))
                    for k in used}
             cost = step_cost(_n_nodes(segs), dt) / fine_cost * (PLANAR_COST if planar else 1.0)
             cands.append(Fidelity("houbolt", dt, float(f), segs, planar, err, cost, float(tolerance),
@@ -378,16 +395,18 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         reason = f"cheapest of {len(ok)}/{len(cands)} Houbolt configurations predicted within tolerance"
     elif fixed_segments:
         segs = scaled_segments(sc, 1.0)
-        best = Fidelity("houbolt", FINE_DT, 1.0, segs, False, {k: 0.0 for k in used},
-                        step_cost(_n_nodes(segs), FINE_DT) / fine_cost, float(tolerance))
+        best = Fidelity("houbolt", fine_dt, 1.0, segs, False, {k: 0.0 for k in used},
+                        step_cost(_n_nodes(segs), fine_dt) / fine_cost, float(tolerance))
     else:
-        best = Fidelity("houbolt", FINE_DT, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
+        best = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
                         float(tolerance))
         reason += "no cheaper configuration is predicted within tolerance: the fine default"
     if planar:
         reason += "; 2-D (nothing excites the lateral plane)"
     elif allow_planar:
         reason += f"; 3-D ({why_not_planar})" if why_not_planar else "; 3-D"
+    if series:
+        reason += f"; series tow: Δt ≤ {SERIES_MAX_DT:g} s"
     if slack:
         reason += (f"; cables go slack (mean tension only {margin:.2g} std above zero): segments not reduced, "
                    f"safety factor {safety:g}")
