@@ -649,7 +649,7 @@ def run(ctx: CaseContext) -> dict:
         disagreements.append(
             "Time-domain compensator runs that did not complete: " + ", ".join(fails) + ". In these seas the "
             "towfish cable goes slack repeatedly (snap loading), the drag-only towfish pitches through large angles "
-            "while slack, and the run stops when pitch reaches the Euler-angle limit (±85°). Hover's quasi-linear "
+            "while slack and can spin up until the Newton iteration fails (simulator problem 3). Hover's quasi-linear "
             "method cannot see slack at all; the statistics of these runs (when ≥ 300 s were completed) use the "
             "record up to the failure.")
     if ss["rov_depth"] < HOVER_S_ROV_DEPTH - 5:

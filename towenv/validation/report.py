@@ -133,8 +133,8 @@ def render(data: dict, path: Path | None = None) -> str:
              "writes this file, the figures and the result cache `docs/validation/results.json`.")
     L.append(f"* Re-render this file from the cache without simulating: `{RENDER_CMD}`.")
     L.append(f"* Quick version (what CI runs, `tests/test_validation.py`): `{QUICK_CMD}` (writes to "
-             "`out/validation_quick/`); one case: `--cases hover`. `python -m towenv.validation` is the same command "
-             "(a `towenv validate` sub-command needs a hook in `towenv/cli.py`, which this package does not edit).")
+             "`out/validation_quick/`); one case: `--cases hover`. `towenv validate` and `python -m towenv.validation` "
+             "are the same command.")
     env = meta["env"]
     L.append(f"* Environment of this run: towenv {env['towenv']}, Python {env['python']}, numpy {env['numpy']}, "
              f"scipy {env['scipy']}, numba {env['numba']}, {env['machine']} with {env['cpus']} CPUs. Wall time per "
