@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -190,14 +191,8 @@ class _Predictor:
         lm = self.model(factor)
         if self.sea is None:
             return self._sinusoid_stats(lm, dt)
-        if dt is None:
+        with _houbolt_time(lm, dt):
             r = lm.spectral(self.sea)
-        else:
-            lm._solve = lambda omega, *a: _discrete_solve(omega, dt, *a)
-            try:
-                r = lm.spectral(self.sea)
-            finally:
-                del lm._solve
         return {k: r.std[k] for k in self.outputs if k in r.std}, r
 
     def flow_margin(self, factor) -> float:
@@ -270,14 +265,8 @@ class _Predictor:
         by_period = self._sinusoids()
         for period, top in by_period.items():
             w = np.array([2 * math.pi / period])
-            if dt is None:
+            with _houbolt_time(lm, dt):
                 r = lm.response(w, top=top)
-            else:
-                lm._solve = lambda omega, *a: _discrete_solve(omega, dt, *a)
-                try:
-                    r = lm.response(w, top=top)
-                finally:
-                    del lm._solve
             amp = float(np.linalg.norm(top))
             for k in self.outputs:
                 if k in r.rao:
@@ -286,6 +275,19 @@ class _Predictor:
                     var.pop(k, None)
             last = r
         return {k: math.sqrt(v) for k, v in var.items() if k in present}, last
+
+
+@contextmanager
+def _houbolt_time(lm, dt):
+    """Within the block, ``lm`` solves the Houbolt-discretised system at step ``dt`` (continuous if None)."""
+    if dt is None:
+        yield
+        return
+    lm._solve = lambda omega, *a: _discrete_solve(omega, dt, *a)
+    try:
+        yield
+    finally:
+        del lm._solve
 
 
 def _discrete_solve(omega, dt, Utop, Kq, Ku, Mq, Mu, C, Cu, Cadd):
