@@ -4,6 +4,11 @@ this script against that code:
 
     cd <checkout of 299a4cc> && PYTHONPATH=. python <this worktree>/tests/data/make_houbolt_reference.py
 
+Regenerated once since, for a deliberate physics change: the gyroscopic term of the body equations now
+includes the added inertia (``condense_body``; docs/validation.md problem 3). The file was made from the
+same 299a4cc checkout with that one change applied (the line ``hvec[i] -= bp[b, 23 + i] * w[i]`` deleted
+from ``condense_body``), so it is still the pre-chart kernel with today's physics.
+
 The attitude test (tests/test_attitude.py) checks that the current kernel reproduces the trajectories bit
 for bit when no body re-charts (every body's pitch stays below the re-chart threshold in these runs).
 

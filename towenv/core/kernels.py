@@ -528,12 +528,13 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
     for i in range(3):
         fb[i] -= mass * tmp3[i]
     body_mass_blocks(b, bp, att, atr, arr)
-    # I_o ω (rigid part only: arr minus added inertia)
+    # gyroscopic term ω × (A_rr ω) with the whole rotational inertia about the tow point, rigid AND added
+    # (Kirchhoff; A_rr is what multiplies ω̇ below — leaving the added inertia out of this term, as the thesis
+    # does, makes a tumbling body with unequal added inertias gain energy: docs/validation.md, problem 3)
     for i in range(3):
         hvec[i] = 0.0
         for j in range(3):
             hvec[i] += arr[i, j] * w[j]
-        hvec[i] -= bp[b, 23 + i] * w[i]
     _cross(w[0], w[1], w[2], hvec[0], hvec[1], hvec[2], tmp3)
     for i in range(3):
         mb[i] -= tmp3[i]

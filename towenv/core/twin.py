@@ -656,9 +656,8 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
                 F = F + tail
                 M = M + np.cross(P["r_aft"], tail)
             A_tt, A_tr, A_rr = body_mass_blocks_np(sys, b)
-            I_o = A_rr - np.diag(P["added_inertia"])
             F = F - P["mass"] * np.cross(w, np.cross(w, P["r_G"]))
-            M = M - np.cross(w, I_o @ w)
+            M = M - np.cross(w, A_rr @ w)          # rigid + added rotational inertia (kernels.condense_body)
             if reduced[b]:
                 # pitch only: roll and yaw held by constraint moments, A_rr⁻¹ → e_y e_yᵀ / A_rr,yy
                 e_y = np.array([0.0, 1.0, 0.0])
