@@ -349,6 +349,26 @@ def plot_cfl(rows, path):
 
 
 # ----------------------------------------------------------------------------------------------------
+#: linear stability limits ω_max Δt / 2 for the highest axial mode at damping ratio 2·ZETA = 0.5 (summary text)
+LINEAR_LIMIT = {"euler": 0.618, "rk2": 1.000, "rk4": 1.311}
+
+
+def _coarse_cells(grid):
+    """How far the coarsest-mesh cells sit from the linear limit (end-node effect on ω_max), from the numbers."""
+    if not grid:
+        return ""
+    n0 = min(r["segments"] for r in grid)
+    cells = []
+    for m in EXPLICIT:
+        rat = [r["lo"] / r["cfl"] / LINEAR_LIMIT[m] - 1 for r in grid if r["solver"] == m and r["segments"] == n0
+               and r["lo"]]
+        if rat:
+            lo, hi = round(100 * min(rat)), round(100 * max(rat))      # ints: no "-0"
+            cells.append(f"{m} {lo:+d} %" if lo == hi else f"{m} {lo:+d} to {hi:+d} %")
+    return (f"; the {n0}-segment cells sit at " + ", ".join(cells) + " of the limit (the end nodes change ω_max "
+            "of so coarse a chain)") if cells else ""
+
+
 def summary(grid, beh, ser, newton):
     o = ["## Summary\n"]
     for m in EXPLICIT:
@@ -364,7 +384,7 @@ def summary(grid, beh, ser, newton):
              f"ζ' = {ZETA} gives the segment damping 2ζ'·l·√(EA·μ), i.e. a ratio 2ζ' for that mode; MoorDyn's BA = −ζ "
              "gives ζ): ω_max Δt ≤ 2(√(1+ζ²) − ζ) → 0.618 l/c_L (semi-implicit Euler), 1.000 (RK2: the edge of its "
              "stability region on the 120° ray), 1.311 (RK4). The bisection returns the largest step that passed, so "
-             "it sits up to 8 % below; the 5-segment cells are 5 % above (end-node effect on ω_max).")
+             "it sits up to 8 % below" + _coarse_cells(grid) + ".")
     hb = [r for r in grid if r["solver"] == "houbolt" and r["lo"]]
     if hb:
         capped = [r for r in hb if r["hi"] is None]
@@ -439,8 +459,10 @@ is the largest Δt that passed, and the smallest that failed is listed with its 
 model, Newton on the node positions, up to 4 step halvings, no axial damping), `euler`
 (semi-implicit), `rk2`, `rk4` (explicit, same model, axial damping ratio {ZETA} ≡ MoorDyn BA = −{2 * ZETA:g}).
 `solver.dt` is capped at {DT_CAP:g} s by the scene schema, so "{fmt(DT_CAP)}+" means stable at the cap.
-Not mapped: the linearised frequency-domain model (it has no time step) and the thesis's tension recursion
-"as published" (`solver.tension_solve`, which fails outright at the thesis's own step guide, tests/test_explicit.py).
+Not mapped: the linearised frequency-domain model (it has no time step), the reduced models (`solver.planar`,
+body `dof = "surge_heave_pitch"`: the same Houbolt integrator with fewer unknowns, on the speed/accuracy chart,
+docs/speed-accuracy.md) and the thesis's tension recursion "as published" (`solver.tension_solve`, which fails
+outright at the thesis's own step guide, tests/test_explicit.py).
 """,
          summary(grid, beh, ser, newton),
          "## Map: shared deck (peer deck at 2 m/s, 1 m heave at 8 s, 8 s ramp)\n",

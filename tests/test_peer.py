@@ -85,3 +85,13 @@ def test_steady_tow_tension_agrees_with_moordyn():
     assert md.failed is None
     assert md.top_tension[-1] == pytest.approx(sim.top_tension, rel=1e-3)
     np.testing.assert_allclose(md.body_position[-1], sim.body_state("ball")["position"], atol=0.1)
+
+
+def test_deck_builders_accept_every_solver_key():
+    """``shared_deck`` / ``series_tow`` keyword overrides reach ``[solver]`` for every solver field
+    (``rho_inf`` was missing from a hand-written list)."""
+    from towenv.peer.decks import SOLVER_KEYS, series_tow, shared_deck
+    assert {"rho_inf", "planar", "dt", "axial_damping_ratio"} <= set(SOLVER_KEYS)
+    sc = shared_deck(segments=8, rho_inf=0.5, dt=0.01, method="generalized_alpha")
+    assert (sc.solver.rho_inf, sc.solver.dt, sc.solver.method) == (0.5, 0.01, "generalized_alpha")
+    assert series_tow(2, rho_inf=0.7).solver.rho_inf == 0.7

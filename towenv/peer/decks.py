@@ -11,7 +11,11 @@ from __future__ import annotations
 import copy
 import math
 
-from ..scene import load_scene
+from ..scene import Solver, load_scene
+
+#: keyword overrides of :func:`shared_deck` / :func:`series_tow` that go to ``[solver]`` (every field of the
+#: solver schema: ``dt``, ``rho_inf``, ``planar``, ...); other keys are dotted scene paths
+SOLVER_KEYS = tuple(Solver.model_fields)
 
 
 def shared_deck(segments: int = 20, speed: float = 2.0, heave: float = 1.0, period: float = 8.0,
@@ -27,10 +31,8 @@ def shared_deck(segments: int = 20, speed: float = 2.0, heave: float = 1.0, peri
         ov["vessel.excitation"] = [dict(type="sinusoid", axis="z", amplitude=float(heave), period=float(period))]
     if ramp is not None:
         ov["vessel.ramp"] = dict(ramp)
-    solver_keys = ("method", "dt", "tolerance", "relative_tolerance", "angle_tolerance", "max_iterations",
-                   "max_step_cuts", "max_strain", "settle_time", "axial_damping_ratio")
     for k, v in overrides.items():
-        ov["solver." + k if k in solver_keys else k] = v
+        ov["solver." + k if k in SOLVER_KEYS else k] = v
     return sc.with_overrides(ov)
 
 
@@ -115,7 +117,5 @@ def series_tow(n_bodies: int = 4, **overrides):
             prev = name
     sc = load_scene(d)
     if overrides:
-        solver_keys = ("method", "dt", "tolerance", "relative_tolerance", "angle_tolerance", "max_iterations",
-                       "max_step_cuts", "max_strain", "settle_time", "axial_damping_ratio")
-        sc = sc.with_overrides({("solver." + k if k in solver_keys else k): v for k, v in overrides.items()})
+        sc = sc.with_overrides({("solver." + k if k in SOLVER_KEYS else k): v for k, v in overrides.items()})
     return sc
