@@ -374,7 +374,8 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         why_not_planar = _planar_refusal(sc)
     planar = why_not_planar is None
     fine_segs = scaled_segments(sc, FINE_SEGMENT_FACTOR)
-    fine_cost = step_cost(_n_nodes(fine_segs), fine_dt)
+    irregular = sea is not None
+    fine_cost = step_cost(_n_nodes(fine_segs), fine_dt, irregular)
     cands = []
     for f in segment_factors:
         segs = scaled_segments(sc, float(f))
@@ -383,7 +384,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
             seg_part = 0.0 if fixed_segments else 1.0
             err = {k: safety * (seg_part * abs(d_seg[float(f)][k]) + abs(d_dt[dt][k] - d_dt[fine_dt][k]))
                    for k in used}
-            cost = step_cost(_n_nodes(segs), dt) / fine_cost * (PLANAR_COST if planar else 1.0)
+            cost = step_cost(_n_nodes(segs), dt, irregular) / fine_cost * (PLANAR_COST if planar else 1.0)
             cands.append(Fidelity("houbolt", dt, float(f), segs, planar, err, cost, float(tolerance),
                                   seconds=0.0))
     ok = [c for c in cands if c.error <= tolerance]
@@ -398,7 +399,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     elif fixed_segments:
         segs = scaled_segments(sc, 1.0)
         best = Fidelity("houbolt", fine_dt, 1.0, segs, False, {k: 0.0 for k in used},
-                        step_cost(_n_nodes(segs), fine_dt) / fine_cost, float(tolerance))
+                        step_cost(_n_nodes(segs), fine_dt, irregular) / fine_cost, float(tolerance))
     else:
         best = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
                         float(tolerance))
@@ -441,12 +442,15 @@ def _planar_refusal(scene) -> str | None:
     return None
 
 
-def step_cost(n_nodes: int, dt: float) -> float:
+def step_cost(n_nodes: int, dt: float, irregular_sea: bool = False) -> float:
     """Relative wall time per simulated second of a Houbolt run: ``(a₀ + it(Δt)·(1 + nodes/40))/Δt`` with
-    ``it(Δt) = 1 + 22 Δt`` Newton iterations per step and ``a₀ = 2`` (per-step work outside the iteration:
-    tow-point motion, history, recording). Fitted to 36 timed runs of two_part_tow_1, conventional_tow and
-    two_part_tow_2 (Δt 0.01–0.2 s, 3–20 segments; docs/fidelity.md)."""
-    return (2.0 + (1.0 + 22.0 * dt) * (1.0 + n_nodes / 40.0)) / dt
+    ``it(Δt) = 1 + 22 Δt`` Newton iterations per step and ``a₀`` the per-step work outside the iteration
+    (tow-point motion, history, recording) in units of one iteration: 0.8, or 4 when an irregular sea drives
+    the vessel (its motion is evaluated every step). Fitted to 36 timed runs of two_part_tow_1 (Table 4.1
+    sinusoid), conventional_tow and two_part_tow_2 in coastal SS4 (Δt 0.01–0.2 s, 3–20 segments:
+    ≈ 7 + 10·it µs per step without a sea, ≈ 35 + 10·it µs with one)."""
+    a0 = 4.0 if irregular_sea else 0.8
+    return (a0 + (1.0 + 22.0 * dt) * (1.0 + n_nodes / 40.0)) / dt
 
 
 #: tolerance used to choose Δt when a scene does not set ``solver.dt`` and no tolerance is given
