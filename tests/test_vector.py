@@ -350,3 +350,12 @@ def test_swapped_pieces_use_the_dict_path_bit_for_bit():
     assert set(infos[-1][0]["reward_components"]) == {"depth", "act"}
     assert venv.single_observation_space.shape == (2,)
     venv.close()
+
+
+def test_parallel_kernel_has_its_own_cache_entry():
+    # numba's disk cache is keyed by qualified name + line: the serial and the prange kernel must not be the
+    # same function, or the "parallel" dispatcher silently loads the serial machine code from the cache
+    from towenv.core import batch
+    assert batch._step_batch_parallel.py_func.__qualname__ != batch._step_batch.py_func.__qualname__
+    assert batch._step_batch_parallel.targetoptions.get("parallel")
+    assert not batch._step_batch.targetoptions.get("parallel")

@@ -249,8 +249,20 @@ def _list_set(lst, i, item):
     lst[i] = item
 
 
+def _renamed(fn, name):
+    """A copy of ``fn`` under another name: numba's on-disk cache is keyed by the function's qualified name
+    and source line, so compiling the SAME function object serially and with ``parallel=True`` made the two
+    dispatchers share one cache entry — the "parallel" kernel then loaded the serial code (measured: one CPU
+    busy, no speed-up)."""
+    import types
+    g = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
+    g.__qualname__ = name
+    g.__doc__ = fn.__doc__
+    return g
+
+
 _step_batch = njit(cache=True)(_step_batch_py)
-_step_batch_parallel = njit(cache=True, parallel=True)(_step_batch_py)
+_step_batch_parallel = njit(cache=True, parallel=True)(_renamed(_step_batch_py, "_step_batch_py_parallel"))
 
 
 @_numba_njit(cache=True)
