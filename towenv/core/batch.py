@@ -221,7 +221,7 @@ def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, base, end, count
             continue
         if count_step:
             refs[b, R_STEPS] += 1.0
-        _copy_step(items[b], gathers[b], n, dt, blk[b, off:off + n], count[b] * dt, kind, U[b, 0], U[b, 1],
+        _copy_step(items[np.int64(b)], gathers[np.int64(b)], n, dt, blk[b, off:off + n], count[b] * dt, kind, U[b, 0], U[b, 1],
                    refs[b], count[b], M[b], res[b])
         if res[b, 0] == K.OK:
             count[b] += n
