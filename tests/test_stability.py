@@ -116,23 +116,25 @@ def test_houbolt_stable_far_beyond_the_explicit_bound(dt, tol_heave, tol_peak, r
 
 def test_houbolt_newton_failure_is_reported_and_rescued_by_step_cuts():
     """Series tow with 4 cables solved together (series_multitow + one more cable and fish): at
-    Δt = 0.05 s the Newton iteration on the tensions does not converge in the light sub-cables. Without
+    Δt = 0.1 s the Newton iteration on the tensions does not converge in the light sub-cables. Without
     step cuts that is a SimulationDivergence naming the segment and the Newton cause, the state finite at
-    the last good step; with the default 4 halvings the run completes (with many cuts)."""
+    the last good step; with the default 4 halvings the run completes (with cuts). At 0.05 s — where it
+    failed before the body–tail coupling was relaxed (kernels.aft_segment_stiffness) — it converges in a
+    few iterations without cuts (measured: at most 3 over 30 s)."""
     sc = series_tow(4)
-    sim = towenv.Simulator(sc, dt=0.05, max_step_cuts=0)
+    sim = towenv.Simulator(sc, dt=0.1, max_step_cuts=0)
     with pytest.raises(towenv.SimulationDivergence) as info:
-        sim.advance(5.0)
+        sim.advance(10.0)
     exc = info.value
     assert "Newton" in exc.cause and "segment" in exc.element
     assert exc.iterations == sim.settings.max_iterations
-    assert np.all(np.isfinite(sim.positions)) and sim.t == pytest.approx(exc.time - 0.05)
-    ok = towenv.Simulator(sc, dt=0.05)
-    ok.advance(5.0)
+    assert np.all(np.isfinite(sim.positions)) and sim.t == pytest.approx(exc.time - 0.1)
+    ok = towenv.Simulator(sc, dt=0.1)
+    ok.advance(10.0)
     assert ok.stats["step_cuts"] > 0 and np.isfinite(ok.top_tension)
-    small = towenv.Simulator(sc, dt=0.02, max_step_cuts=0)
-    small.advance(5.0)
-    assert small.stats["max_iterations"] <= 3
+    small = towenv.Simulator(sc, dt=0.05, max_step_cuts=0)
+    small.advance(10.0)
+    assert small.stats["max_iterations"] <= 4
 
 
 @pytest.mark.parametrize("method,dt,tol_heave,tol_peak", [

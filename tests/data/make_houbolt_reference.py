@@ -9,6 +9,13 @@ includes the added inertia (``condense_body``; docs/validation.md problem 3). Th
 same 299a4cc checkout with that one change applied (the line ``hvec[i] -= bp[b, 23 + i] * w[i]`` deleted
 from ``condense_body``), so it is still the pre-chart kernel with today's physics.
 
+Regenerated a second time for the series-tow relaxation (``kernels.aft_segment_stiffness`` /
+``aft_rotational_stiffness``, ``system.tail_masses``: the body–tail coupling relaxed inside the Newton
+loop, which changes the iterates but not the converged solution): the same 299a4cc checkout with the
+gyroscopic change, those functions and their two call sites in ``houbolt_step`` applied. Only
+``series_multitow`` changed (by ≤ 4e-12 m in positions, ≤ 5e-9 N in tensions: Newton-tolerance level);
+the three scenes without an aft tow point were reproduced bit for bit.
+
 The attitude test (tests/test_attitude.py) checks that the current kernel reproduces the trajectories bit
 for bit when no body re-charts (every body's pitch stays below the re-chart threshold in these runs).
 

@@ -967,6 +967,61 @@ def _translational_damping(b, lam, vbody, w, bp, btab_n, btab, rho, g, cur_b, f0
 
 
 @njit(cache=True)
+def aft_segment_stiffness(s, m_tail, stretched, tens, l0, ea, hdt2):
+    """Stiffness of a taut series-tow tail segment ``s`` (hanging from an aft tow point) against motion of
+    the aft point within one step: (axial, geometric). Axial: the segment's compliance l/EA in series with
+    the inertia of everything hanging below it, ``m_tail`` (½Δt²/m; ``system.tail_masses``: the tail
+    moves with the aft point when Δt is long against its axial period); geometric: T/ℓ. Zero when slack.
+
+    Used only to relax the block Gauss–Seidel coupling of a body with its tail (the tail's pull is a load
+    on the body inside the Newton loop; unrelaxed, the iteration's gain is about m_tail / m_body and it
+    diverges when the tail outweighs the body). Added to both sides of the body's update, it changes the
+    convergence rate, never the converged solution (docs/model-notes.md "Series coupling")."""
+    if tens[s] <= 0.0 or stretched[s] <= 0.0:
+        return 0.0, 0.0
+    comp = 0.0 if math.isinf(ea[s]) else l0[s] / ea[s]
+    if m_tail > 0.0 and not math.isinf(m_tail):
+        comp += hdt2 / m_tail
+    kax = 1.0 / comp if comp > 0.0 else 0.0
+    return kax, tens[s] / stretched[s]
+
+
+@njit(cache=True)
+def aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tang, stretched, tens, l0, ea, hdt2,
+                             m_tail, bkc):
+    """Adds to ``bkc[b, 0:3]`` the restoring stiffness of the tail's pull about the body's axes
+    (e_i = body axis i): for a rotation δθ about e the aft point moves by u = e × d (d = aft point − body
+    node) and K = T (d·t − (e·d)(e·t)) + k_ax (t·u)² + (T/ℓ)(|u|² − (t·u)²), clipped at 0 (t: direction
+    of the pull). Relaxation only (see :func:`aft_segment_stiffness`)."""
+    d0 = rs[c, 0] - rs[a, 0]
+    d1 = rs[c, 1] - rs[a, 1]
+    d2 = rs[c, 2] - rs[a, 2]
+    for k in range(node_nseg[c]):
+        s = node_segs[c, k]
+        kax, kgeo = aft_segment_stiffness(s, m_tail, stretched, tens, l0, ea, hdt2)
+        if kax == 0.0 and kgeo == 0.0:
+            continue
+        # the pull on the aft point is along the segment, away from it
+        sg = 1.0 if seg_up[s] == c else -1.0
+        t0 = -sg * tang[s, 0]
+        t1 = -sg * tang[s, 1]
+        t2 = -sg * tang[s, 2]
+        for i in range(3):
+            e0 = lam[i, 0]
+            e1 = lam[i, 1]
+            e2 = lam[i, 2]
+            u0 = e1 * d2 - e2 * d1
+            u1 = e2 * d0 - e0 * d2
+            u2 = e0 * d1 - e1 * d0
+            tu = t0 * u0 + t1 * u1 + t2 * u2
+            kk = (tens[s] * ((d0 * t0 + d1 * t1 + d2 * t2)
+                             - (e0 * d0 + e1 * d1 + e2 * d2) * (e0 * t0 + e1 * t1 + e2 * t2))
+                  + kax * tu * tu + kgeo * (u0 * u0 + u1 * u1 + u2 * u2 - tu * tu))
+            if kk > 0.0:
+                bkc[b, i] += kk
+
+
+@njit(cache=True)
 def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
@@ -1079,6 +1134,13 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                         for m in range(3):
                             sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
                     bnode[a, i, j] += sacc
+        if it == 1:
+            # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
+            for b in range(nb):
+                c = body_aft_node[b]
+                if c >= 0:
+                    aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
+                                             stretched, tens, l0, ea, hdt2, bp[b, 30], bkc)
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
         for a in range(nn):
             if node_kind[a] == COMPENSATOR:
@@ -1099,6 +1161,24 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                             kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
                     att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
                     tmp33[i, j] = mnode[a, i, j] + att[i, j]
+            # a body towing a tail from its aft tow point: the tail's pull is a load on the body inside the
+            # Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ +
+            # T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness)
+            for b in range(nb):
+                c = body_aft_node[b]
+                if body_node[b] != a or c < 0:
+                    continue
+                for k in range(node_nseg[c]):
+                    sk = node_segs[c, k]
+                    kax, kgeo = aft_segment_stiffness(sk, bp[b, 30], stretched, tens, l0, ea, hdt2)
+                    if kax == 0.0 and kgeo == 0.0:
+                        continue
+                    for i in range(3):
+                        for j in range(3):
+                            tt = tang[sk, i] * tang[sk, j]
+                            add = hdt2 * (kax * tt + kgeo * ((1.0 if i == j else 0.0) - tt))
+                            att[i, j] += add
+                            tmp33[i, j] += add
             if not _inv3(tmp33, tmp33b):
                 return FAIL_NAN, it, a, 0.0
             for j in range(3):

@@ -14,7 +14,7 @@ import numpy as np
 from .kernels import COMPENSATOR, FREE, PRESCRIBED_AFT, PRESCRIBED_FIXED, PRESCRIBED_TOP
 
 MAX_SEGS_PER_NODE = 8
-BODY_PARAM = 30          # see the layout in _rigid_body_params
+BODY_PARAM = 31          # see the layout in _rigid_body_params
 MAX_TABLE = 64
 
 
@@ -344,7 +344,7 @@ def build_system(scene) -> System:
     cur = _get(scene, "current")
     cur_z, cur_v = current_table(cur)
 
-    return System(seg_lo=seg_lo_a, seg_up=seg_up_a, seg_uplocal=seg_uplocal,
+    system = System(seg_lo=seg_lo_a, seg_up=seg_up_a, seg_uplocal=seg_uplocal,
                   node_kind=np.array(node_kind, np.int64), node_nseg=node_nseg, node_segs=node_segs,
                   node_sgn=node_sgn, order=order, pos=pos, node_parent=node_parent, node_up_seg=node_up_seg,
                   post_order=post, top_node=top_node,
@@ -354,6 +354,41 @@ def build_system(scene) -> System:
                   rho=rho, g=g, cur_z=cur_z, cur_v=cur_v,
                   lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps, anchors=anchors,
                   comp_node=comp_node)
+    tail_masses(system)
+    return system
+
+
+def tail_masses(system: "System") -> None:
+    """Store in ``bp[b, 30]`` the mass hanging below each body's aft tow point (series tows): cable dry
+    mass, clump/ball masses and towed bodies' mass plus their largest added mass; ``inf`` when the tail
+    ends at an anchor. Used only to relax the body–tail coupling of the Newton loop
+    (``kernels.aft_segment_stiffness``), so an estimate is enough."""
+    s = system
+    nb = s.body_node.shape[0]
+    if nb == 0:
+        return
+    nn = s.node_kind.shape[0]
+    rigid_at = {int(s.body_node[b]): b for b in range(nb)}
+    for b in range(nb):
+        c = int(s.body_aft_node[b])
+        if c < 0:
+            s.bp[b, 30] = 0.0
+            continue
+        inside = np.zeros(nn, bool)
+        for a in range(nn):
+            x = a
+            while x >= 0 and x != c:
+                x = int(s.node_parent[x])
+            inside[a] = x == c
+        if np.any(s.node_kind[inside] == PRESCRIBED_FIXED):
+            s.bp[b, 30] = np.inf
+            continue
+        m = float(np.sum((s.mu * s.l0)[inside[s.seg_up]])) + float(np.sum(s.pb_mass[inside]))
+        for a in np.nonzero(inside)[0]:
+            r = rigid_at.get(int(a))
+            if r is not None:
+                m += float(s.bp[r, 0] + np.max(s.bp[r, 20:23]))
+        s.bp[b, 30] = m
 
 
 def current_table(cur):
@@ -376,7 +411,7 @@ def _rigid_body_params(b) -> np.ndarray:
     """Layout: 0 mass, 1 volume, 2 area, 3 length, 4-6 r_G, 7-9 r_B, 10-12 I_G (principal),
     13-15 linear rotational damping, 16-18 quadratic rotational damping, 19 lift slope (per rad),
     20-22 added mass, 23-25 added inertia, 26-28 aft tow point, 29 reduced DOF flag (1: surge/heave/pitch,
-    roll and yaw held)."""
+    roll and yaw held), 30 tail mass (series tows, set by :func:`tail_masses`)."""
     p = np.zeros(BODY_PARAM)
     p[0] = float(_get(b, "mass"))
     p[1] = float(_get(b, "volume", 0.0))
@@ -579,4 +614,6 @@ def remesh_top(sysm: "System", line: str, insert: bool, l_nom: float):
                  pb_ca=per_node(sysm.pb_ca), rho=sysm.rho, g=sysm.g, cur_z=sysm.cur_z, cur_v=sysm.cur_v,
                  lines=lines, bodies=bodies, anchors={nn_(k): v for k, v in sysm.anchors.items()},
                  comp_node=comp_node)
+    new.bp = sysm.bp.copy()
+    tail_masses(new)
     return new, np.asarray(node_map), np.asarray(seg_map), info

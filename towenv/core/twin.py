@@ -548,6 +548,48 @@ def translational_damping_np(sys, b, lam, vbody, omega, cur_global, f0):
     return D
 
 
+def aft_segment_stiffness_np(sys, s, m_tail, stretched, tens, dt):
+    """(axial, geometric) stiffness of the taut tail segment ``s`` hanging from an aft tow point against the
+    aft point's motion within one step: 1/(l/EA + ½Δt²/m_tail) and T/ℓ; (0, 0) when slack
+    (kernels.aft_segment_stiffness)."""
+    if tens[s] <= 0.0 or stretched[s] <= 0.0:
+        return 0.0, 0.0
+    comp = 0.0 if math.isinf(sys.ea[s]) else sys.l0[s] / sys.ea[s]
+    if m_tail > 0.0 and not math.isinf(m_tail):
+        comp += 0.5 * dt * dt / m_tail
+    return (1.0 / comp if comp > 0.0 else 0.0), tens[s] / stretched[s]
+
+
+def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt):
+    """Relaxation of the body–tail (series tow) coupling for body ``b``: the translational stiffness
+    Σ k_ax t tᵀ + T/ℓ (𝟙 − t tᵀ) (3×3, added to the body node's ½Δt²-scaled linearisation) and the
+    rotational stiffness about the body axes e_i, K_i = Σ max(0, T (d·t − (e·d)(e·t)) + k_ax (t·u)²
+    + T/ℓ (|u|² − (t·u)²)), u = e × d, d = aft point − body node, t the pull's direction
+    (kernels.aft_rotational_stiffness). They change the convergence rate only."""
+    a = int(sys.body_node[b])
+    c = int(sys.body_aft_node[b])
+    kt = np.zeros((3, 3))
+    kr = np.zeros(3)
+    if c < 0:
+        return kt, kr
+    d = rs[c] - rs[a]
+    for k in range(int(sys.node_nseg[c])):
+        s = int(sys.node_segs[c, k])
+        kax, kgeo = aft_segment_stiffness_np(sys, s, sys.bp[b, 30], seg.stretched, tens, dt)
+        if kax == 0.0 and kgeo == 0.0:
+            continue
+        tt = np.outer(seg.tang[s], seg.tang[s])
+        kt += kax * tt + kgeo * (_I3 - tt)
+        t = -(1.0 if sys.seg_up[s] == c else -1.0) * seg.tang[s]
+        for i in range(3):
+            e = lam[i]
+            u = np.cross(e, d)
+            tu = t @ u
+            kk = tens[s] * (d @ t - (e @ d) * (e @ t)) + kax * tu * tu + kgeo * (u @ u - tu * tu)
+            kr[i] += max(kk, 0.0)
+    return kt, kr
+
+
 def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     """Twin of ``kernels.houbolt_step``: one Houbolt step (model.md 5.1–5.2) on copies of the state.
 
@@ -674,6 +716,12 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             body.append((lam, dang, w, X, y, np.diag(A_rr).copy()))
         # 2. node-local affine map r(T)
         lin = c11 * bnode + hdt2 * geometric_stiffness_np(sys, seg, tens)
+        for b in range(nb):
+            if sys.body_aft_node[b] >= 0:      # series tow: relax the body–tail coupling (rate only)
+                kt, kr = aft_relaxation_np(sys, b, rs, body[b][0], seg, tens, dt)
+                lin[sys.body_node[b]] += hdt2 * kt
+                if it == 1:
+                    relax[b, :3] += kr
         Mt = mnode + lin
         minv = np.zeros_like(Mt)
         minv[free] = np.linalg.inv(Mt[free])
