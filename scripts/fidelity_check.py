@@ -37,10 +37,21 @@ def sea(code, heading=180.0, seed=1):
 HEAVE8 = {"vessel.speed": 2.0,
           "vessel.excitation": [{"type": "sinusoid", "axis": "z", "amplitude": 1.0, "period": 8.0}]}
 
-# (label, scene, overrides, role). "build": used to set SAFETY; "tuned": seen when a rule was added after a
-# check run missed — the slack rule (SLACK_NONLINEAR / SAFETY_SLACK) after two_part_tow_2, the flow rule
-# (FLOW_MARGIN) after hover_deep_tow, the series-tow step cap (SERIES_MAX_DT, a known limitation) after
-# series_multitow ran slower than the fine default — so no longer held out; "held-out": not run before the rules were fixed.
+def pm_sea(code, heading=180.0, seed=1):
+    out = sea(code, heading, seed)
+    out["sea"]["spectrum"] = "pm"
+    return out
+
+
+# (label, scene, overrides, role).
+# "build": used to set SAFETY.
+# "tuned": looked at while the rules were set — the slack rule (SLACK_NONLINEAR / SAFETY_SLACK) after
+#   two_part_tow_2, the flow rule (FLOW_MARGIN) after hover_deep_tow, and, in a second round, the pilot run
+#   (after channel_I31's chosen step tumbled the fish) and the removal of the series-tow step cap (after the
+#   body–tail relaxation, docs/model-notes.md); every case of the first check is "tuned" now, including those
+#   that were held out then (docs/fidelity.md lists the first check's held-out result).
+# "held-out": added after the second round's rules were fixed and never run before that; they include scenes
+#   and scene variants (cable length, speed, spectrum, heading, sea state) the rules never saw.
 CASES = [
     ("two_part_tow_1 (Table 4.1 sinusoid)", "two_part_tow_1", {}, "build"),
     ("two_part_coastal_ss4 (SS4 head sea)", "two_part_coastal_ss4", {}, "build"),
@@ -50,17 +61,34 @@ CASES = [
     ("conventional_tow, coastal SS5", "conventional_tow", sea(5), "tuned"),
     ("two_part_tow_2, coastal SS4", "two_part_tow_2", sea(4), "tuned"),
     ("two_part_tow_2, coastal SS4 at 150°", "two_part_tow_2", sea(4, 150.0), "tuned"),
-    ("peer_deck at 2 m/s, 1 m heave at 8 s", "peer_deck", HEAVE8, "held-out"),
+    ("peer_deck at 2 m/s, 1 m heave at 8 s", "peer_deck", HEAVE8, "tuned"),
     ("hover_deep_tow (1 m heave at 10 s)", "hover_deep_tow", {}, "tuned"),
-    ("channel_I31", "channel_I31", {}, "held-out"),
-    ("channel_C31", "channel_C31", {}, "held-out"),
-    ("parallel_multitow, coastal SS3", "parallel_multitow", sea(3), "held-out"),
-    ("conventional_tow, coastal SS4 following sea", "conventional_tow", sea(4, 0.0), "held-out"),
-    ("two_part_tow_1, coastal SS3", "two_part_tow_1", {**sea(3), "vessel.excitation": None}, "held-out"),
+    ("channel_I31", "channel_I31", {}, "tuned"),
+    ("channel_C31", "channel_C31", {}, "tuned"),
+    ("parallel_multitow, coastal SS3", "parallel_multitow", sea(3), "tuned"),
+    ("conventional_tow, coastal SS4 following sea", "conventional_tow", sea(4, 0.0), "tuned"),
+    ("two_part_tow_1, coastal SS3", "two_part_tow_1", {**sea(3), "vessel.excitation": None}, "tuned"),
     ("series_multitow, coastal SS3", "series_multitow", sea(3), "tuned"),
-    ("two_part_tow_2, coastal SS5", "two_part_tow_2", sea(5), "held-out"),
-    ("two_part_tow_2, coastal SS3 following sea", "two_part_tow_2", sea(3, 0.0), "held-out"),
-    ("conventional_tow at 2 m/s, coastal SS4", "conventional_tow", {**sea(4), "vessel.speed": 2.0}, "held-out"),
+    ("two_part_tow_2, coastal SS5", "two_part_tow_2", sea(5), "tuned"),
+    ("two_part_tow_2, coastal SS3 following sea", "two_part_tow_2", sea(3, 0.0), "tuned"),
+    ("conventional_tow at 2 m/s, coastal SS4", "conventional_tow", {**sea(4), "vessel.speed": 2.0}, "tuned"),
+    # --- held out (second round) ---
+    ("series_multitow at 2 m/s without the turn, coastal SS5", "series_multitow",
+     {**sea(5), "vessel.speed": 2.0, "vessel.manoeuvres": []}, "held-out"),
+    ("series_multitow, coastal SS4 at 150°", "series_multitow", sea(4, 150.0), "held-out"),
+    ("parallel_multitow, coastal SS4 following sea", "parallel_multitow", sea(4, 0.0), "held-out"),
+    ("two_part_tow_1 at 2 m/s, coastal SS5", "two_part_tow_1", {**sea(5), "vessel.speed": 2.0}, "held-out"),
+    ("conventional_tow, coastal SS3 at 120°, Pierson–Moskowitz", "conventional_tow", pm_sea(3, 120.0), "held-out"),
+    ("two_part_coastal_ss4 at 2.5 m/s, seed 7", "two_part_coastal_ss4",
+     {"vessel.speed": 2.5, "sea.seed": 7}, "held-out"),
+    ("two_part_tow_2 at 2 m/s, coastal SS4 following sea", "two_part_tow_2",
+     {**sea(4, 0.0), "vessel.speed": 2.0}, "held-out"),
+    ("hover_deep_tow at 1.5 m/s, coastal SS4", "hover_deep_tow", {**sea(4), "vessel.speed": 1.5}, "held-out"),
+    ("conventional_tow with a 400 m tow line, coastal SS4", "conventional_tow",
+     {**sea(4), "lines.tow.length": 400.0, "lines.tow.segments": 16}, "held-out"),
+    ("peer_deck at 2 m/s, coastal SS4", "peer_deck", {**sea(4), "vessel.speed": 2.0}, "held-out"),
+    ("two_part_turn, coastal SS3", "two_part_turn", sea(3), "held-out"),
+    ("channel_YA22", "channel_YA22", {}, "held-out"),
 ]
 TOLERANCES = (0.02, 0.05, 0.10)
 

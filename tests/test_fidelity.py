@@ -81,6 +81,31 @@ def test_rules_slack_and_nonlinear_flow():
     assert "strongly nonlinear" in ch.reason
 
 
+def test_pilot_run_rejects_a_step_at_which_the_fish_tumbles():
+    """channel_I31 at 5 %: the linear prediction accepts Δt = 0.075 s, at which the fish tumbles after
+    23 s (the first check's failure); the pilot run sees it and the next candidate, with a smaller step,
+    is chosen. Without the pilot the tumbling step is chosen."""
+    sc = load("channel_I31")
+    blind = F.select(sc, tolerance=0.05, pilot=False)
+    assert blind.dt == pytest.approx(0.075) and blind.pilot == ""
+    ok, note = F.pilot_run(sc, blind.overrides())
+    assert not ok and "diverged" in note
+    ch = F.select(sc, tolerance=0.05)
+    assert ch.dt < blind.dt and ch.error <= 0.05
+    assert "failed" in ch.pilot and "passed" in ch.pilot
+    assert F.pilot_run(sc, ch.overrides())[0]
+
+
+def test_series_tows_are_not_capped_at_short_steps():
+    """The series-tow step cap (Δt ≤ 0.02 s) is gone: series_multitow in SS3 gets a step ≥ 0.05 s at 5 %,
+    and the pilot confirms it runs without step cuts (body–tail relaxation, docs/model-notes.md)."""
+    sc = load("series_multitow").with_overrides({
+        "sea": {"code": 3, "convention": "coastal", "heading_deg": 180.0, "seed": 1},
+        "vessel.model": "coastal_survey", "vessel.excitation": None})
+    ch = F.select(sc, tolerance=0.05)
+    assert ch.dt >= 0.05 and "passed" in ch.pilot
+
+
 def test_linearised_model_offered_only_when_loose_and_taut():
     sc = _deck(amplitude=0.2, period=8.0)
     assert F.select(sc, tolerance=0.2).method == "linear"

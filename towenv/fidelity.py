@@ -5,7 +5,7 @@ line, 2-D (vertical plane) or 3-D, and nonlinear time domain (Houbolt) or the li
 model, with the predicted relative error of the fish's heave and pitch statistics against the *fine
 default* (Houbolt, Δt = 0.01 s or the scene's Δt if smaller, twice the scene's segments, 3-D) and the predicted cost relative to it.
 
-How the error is predicted (no time-domain run is needed; a selection takes tens of milliseconds):
+How the error is predicted (no time-domain run is needed for the prediction itself):
 
 * **Time step.** The linearised model (:mod:`towenv.linear`) is solved with Houbolt's *discrete*
   operators in place of ``iω`` and ``−ω²``: for a response ``x_n = X zⁿ``, ``z = e^{iωΔt}``, the Houbolt
@@ -23,6 +23,14 @@ How the error is predicted (no time-domain run is needed; a selection takes tens
 
 The time-step and segment errors are added (conservative) and multiplied by :data:`SAFETY`, calibrated
 on the *build* cases of ``scripts/fidelity_check.py`` and checked on held-out scenes (docs/fidelity.md).
+
+**Pilot run.** The linear prediction cannot see failures of the nonlinear iteration (a slack cable
+snapping, a body tumbling, a coupling that needs step cuts). The cheapest candidates predicted within
+tolerance are therefore run for :data:`PILOT_SECONDS` from the scene's start (deterministic, same sea
+seed), and the first that completes without a single step cut is chosen; candidates with a Δt at or above
+one that failed are skipped. This replaced a fixed Δt ≤ 0.02 s cap for series tows, whose body–tail
+coupling now converges at long steps (docs/model-notes.md "Series coupling — relaxation"). A selection
+takes 0.05–0.5 s with its pilots.
 """
 from __future__ import annotations
 
@@ -35,7 +43,7 @@ import numpy as np
 
 FINE_DT = 0.01
 FINE_SEGMENT_FACTOR = 2.0
-DT_CANDIDATES = (0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2)
+DT_CANDIDATES = (0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3)
 SEGMENT_FACTORS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
 OUTPUTS = ("fish_heave", "fish_pitch")
 #: multiplies the predicted discretisation error (calibrated on the build cases, docs/fidelity.md)
@@ -53,8 +61,10 @@ SAFETY_SLACK = 2.5
 #: linearised error prediction to apply (at U ≈ 0 the body's incidence flips through ±90° every cycle and
 #: its pitch is not a linear function of the motion — docs/linear.md "where it fails")
 FLOW_MARGIN = 2.0
-#: largest Δt offered for series tows (bodies with an aft tow point)
-SERIES_MAX_DT = 0.02
+#: simulated seconds of the pilot run that checks a chosen configuration (:func:`pilot_run`)
+PILOT_SECONDS = 40.0
+#: at most this many candidates are piloted before falling back to the fine default
+MAX_PILOTS = 4
 
 
 def fine_time_step(scene) -> float:
@@ -85,6 +95,7 @@ class Fidelity:
     reason: str = ""
     candidates: list = field(default_factory=list, repr=False)
     seconds: float = 0.0
+    pilot: str = ""                 # outcome of the pilot run(s) (empty when none was made)
 
     @property
     def error(self) -> float:
@@ -310,7 +321,8 @@ def _ratio_dev(a, b):
 
 def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, allow_linear: bool = True,
            allow_planar: bool = True, dt_candidates=DT_CANDIDATES, segment_factors=SEGMENT_FACTORS,
-           safety: float = SAFETY, fixed_segments: bool = False) -> Fidelity:
+           safety: float = SAFETY, fixed_segments: bool = False, pilot: bool = True,
+           pilot_seconds: float = PILOT_SECONDS) -> Fidelity:
     """The cheapest configuration predicted to keep the significant amplitudes of ``outputs`` (fish heave
     and pitch by default) within ``tolerance`` (relative, e.g. 0.05) of the fine default.
 
@@ -320,7 +332,10 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     statistic with the segment factor ``f`` (vs ×2) and ``δ_Δt`` its relative change from continuous time
     to Houbolt at Δt (scene segments). Cost = nodes/Δt relative to the fine default (× the measured 2-D
     saving when planar). ``fixed_segments=True`` keeps the scene's segment counts and chooses Δt alone
-    (its error then counts the time step only)."""
+    (its error then counts the time step only). ``pilot=True``: the cheapest candidates are run for
+    ``pilot_seconds`` from the scene's start, and the first that completes without a step cut is taken
+    (:func:`pilot_run`; ``Fidelity.pilot`` says what happened) — the linear prediction cannot see Newton
+    failures (slack snaps, a tumbling body)."""
     from .core.simulator import load
     t0 = time.perf_counter()
     if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not (0.0 < tolerance < 1.0):
@@ -358,11 +373,6 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         d_seg[float(f)] = {k: _ratio_dev(s[k], cont_ref[k]) for k in used}
     d_dt = {}
     fine_dt = fine_time_step(sc)
-    series = any(getattr(b, "aft_tow_point", None) is not None for b in sc.bodies)
-    if series:
-        # series tows: the aft-tow-point coupling needs step cuts above ~0.02 s (README "Status"), which the
-        # cost model does not see
-        dt_candidates = tuple(d for d in dt_candidates if d <= SERIES_MAX_DT) or (min(fine_dt, SERIES_MAX_DT),)
     if dt_candidates is DT_CANDIDATES and fine_dt < min(DT_CANDIDATES):
         # model-scale scenes: also try small multiples of the scene's own step
         dt_candidates = tuple(sorted(set(DT_CANDIDATES) | {fine_dt * m for m in (1, 2, 3, 5)}))
@@ -393,9 +403,14 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         ok = []
         reason = (f"the fish's mean relative flow is only {flow:.2g} × its velocity std (< {FLOW_MARGIN:g}): its "
                   "hydrodynamics are strongly nonlinear and the linear error prediction does not apply — ")
+    pilot_notes = []
+    if ok and pilot:
+        ok = _piloted(sc, sorted(ok, key=lambda c: (c.relative_cost, c.error)), pilot_seconds, pilot_notes)
     if ok:
         best = min(ok, key=lambda c: (c.relative_cost, c.error))
         reason = f"cheapest of {len(ok)}/{len(cands)} Houbolt configurations predicted within tolerance"
+        if pilot:
+            reason += " that passed the pilot run"
     elif fixed_segments:
         segs = scaled_segments(sc, 1.0)
         best = Fidelity("houbolt", fine_dt, 1.0, segs, False, {k: 0.0 for k in used},
@@ -408,8 +423,6 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         reason += "; 2-D (nothing excites the lateral plane)"
     elif allow_planar:
         reason += f"; 3-D ({why_not_planar})" if why_not_planar else "; 3-D"
-    if series:
-        reason += f"; series tow: Δt ≤ {SERIES_MAX_DT:g} s"
     if slack:
         reason += (f"; cables go slack (mean tension only {margin:.2g} std above zero): segments not reduced, "
                    f"safety factor {safety:g}")
@@ -423,8 +436,48 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
             reason += f"; linearised model rejected: mean tension only {margin:.1f} std above zero (slack risk)"
     best.reason = reason
     best.candidates = cands
+    best.pilot = "; ".join(pilot_notes)
     best.seconds = time.perf_counter() - t0
     return best
+
+
+def pilot_run(scene, overrides: dict, seconds: float = PILOT_SECONDS):
+    """Run ``scene`` with ``overrides`` for ``seconds`` from its start (same sea seed, deterministic).
+    Returns ``(passed, note)``: passed when the run completes without a step cut (a halved step means the
+    Newton iteration did not converge at this Δt somewhere — a failure the linear error prediction cannot
+    see: slack snaps, series couplings, a body tumbling)."""
+    from .core.simulator import Simulator
+    from .errors import SimulationDivergence
+    try:
+        sim = Simulator(scene.with_overrides(overrides))
+        sim.advance(seconds)
+    except SimulationDivergence as exc:
+        return False, f"diverged at t = {exc.time:.1f} s ({exc.cause.split(' (')[0]})"
+    except (ValueError, FloatingPointError) as exc:
+        return False, f"refused: {str(exc)[:120]}"
+    st = sim.stats
+    if st["step_cuts"]:
+        return False, f"{st['step_cuts']} step cuts in {seconds:g} s"
+    return True, f"{st['mean_iterations']:.2f} Newton iterations per step, no step cuts"
+
+
+def _piloted(sc, ordered, seconds, notes):
+    """The candidates (cheapest first) from the first one whose pilot run passes; a candidate is skipped
+    without a run when one with the same or a smaller Δt has already failed."""
+    failed_dt = math.inf
+    for i, c in enumerate(ordered):
+        if c.dt is not None and c.dt >= failed_dt:
+            continue
+        if len([n for n in notes if "failed" in n]) >= MAX_PILOTS:
+            break
+        passed, note = pilot_run(sc, c.overrides(), seconds)
+        tag = f"Δt = {c.dt:g} s{', 2-D' if c.planar else ''}, segment factor {c.segment_factor:g}"
+        if passed:
+            notes.append(f"pilot {seconds:g} s passed ({tag}): {note}")
+            return [c] + [d for d in ordered[i + 1:] if d.dt is None or d.dt < failed_dt]
+        notes.append(f"pilot {seconds:g} s failed ({tag}): {note}")
+        failed_dt = min(failed_dt, c.dt if c.dt is not None else math.inf)
+    return []
 
 
 #: wall time of the 2-D model relative to 3-D at equal settings: 1.18–1.27× faster on two_part_tow_1,
