@@ -427,12 +427,15 @@ class Simulator:
                 done += k + 1
                 self._remesh()
                 continue
-            t_fail = t_start + (done + k + 1) * dt
-            cause = _CAUSES.get(st, f"status {st}")
-            if st == K.FAIL_NEWTON:
-                cause = cause.replace("(after step cuts)", f"(after {self.settings.max_step_cuts} step halvings)")
-            raise SimulationDivergence(t_fail, self._element_name(st, el), cause,
-                                       int(self.settings.max_iterations), float(md))
+            raise self._divergence(st, el, md, t_start + (done + k + 1) * dt)
+
+    def _divergence(self, st, el, md, t_fail) -> SimulationDivergence:
+        """The SimulationDivergence for kernel status ``st`` (element ``el``, last max|δT| ``md``) at ``t_fail``."""
+        cause = _CAUSES.get(st, f"status {st}")
+        if st == K.FAIL_NEWTON:
+            cause = cause.replace("(after step cuts)", f"(after {self.settings.max_step_cuts} step halvings)")
+        return SimulationDivergence(t_fail, self._element_name(st, el), cause, int(self.settings.max_iterations),
+                                    float(md))
 
     def _remesh(self):
         """Insert a node near the top of the winch line (payout) or remove one (haul-in), model.md 2.8."""
