@@ -1,10 +1,10 @@
 """Fit the cost model of towenv.fidelity.step_cost to timed Houbolt runs.
 
-The model: wall time per simulated second ∝ (a₀ + it(Δt)·(1 + nodes/n₀)) / Δt with it(Δt) = 1 + k·Δt
-Newton iterations per step and a₀ the per-step work outside the iteration (larger when an irregular sea
-drives the vessel: its motion is evaluated every step). Runs only scenes that are *not* held out in
-scripts/fidelity_check.py (Table 4.1 sinusoid tows and coastal-sea variants of them), 3-D, 100 s each,
-median of 3 repeats, and prints the fitted constants and the fit's error.
+The model (µs per step): a₀ + a_sea·[irregular sea] + it(Δt)·(b₀ + b_seg·segments + b_body·rigid bodies),
+it(Δt) = 1 + k·Δt Newton iterations per step, plus a per-run constant c/steps; a_sea is the vessel motion
+evaluated every step when an irregular sea drives the vessel. Runs only scenes that are *not* held out in
+scripts/fidelity_check.py (Table 4.1 sinusoid tows and coastal-sea variants of them), 3-D, 300 s each
+(the check's duration), median of 3 repeats, and prints the fitted constants and the fit's error.
 
     python scripts/fidelity_cost_fit.py
 """
@@ -27,15 +27,18 @@ from towenv.core.run import simulate  # noqa: E402
 from towenv.core.simulator import Simulator, load  # noqa: E402
 
 CASES = [("two_part_tow_1", {}, False), ("conventional_tow", {}, False), ("two_part_tow_2", {}, False),
-         ("conventional_tow", sea(4), True), ("two_part_tow_2", sea(4), True), ("two_part_coastal_ss4", {}, True)]
+         ("conventional_tow", sea(4), True), ("two_part_tow_2", sea(4), True), ("two_part_coastal_ss4", {}, True),
+         ("series_multitow", sea(3), True)]
 DTS = (0.01, 0.02, 0.05, 0.1, 0.2)
 FACTORS = (0.5, 1.0, 2.0)
-DURATION = 100.0
+DURATION = 300.0
 
 
-def model(p, n, dt, irregular):
-    a0 = np.where(irregular, p[1], p[0])
-    return p[4] * (a0 + (1.0 + p[2] * dt) * (1.0 + n / p[3])) / dt
+def model(p, n, nb, dt, irregular, steps):
+    """Wall seconds per simulated second."""
+    a0, a_sea, k, b0, b_seg, b_body, c = p
+    per_step = a0 + a_sea * irregular + (1.0 + k * dt) * (b0 + b_seg * n + b_body * nb)
+    return 1e-6 * (per_step + 1e3 * c / steps) / dt
 
 
 def main():
@@ -45,6 +48,7 @@ def main():
         for f in FACTORS:
             segs = F.scaled_segments(base, f)
             n = F._n_nodes(segs)
+            nb = sum(1 for b in base.bodies if getattr(b, "kind", "") in ("fish", "depressor"))
             for dt in DTS:
                 sc = F._with_segments(base, segs).with_overrides({"solver.dt": dt})
                 walls = []
@@ -54,26 +58,24 @@ def main():
                     simulate(sim, DURATION)
                     walls.append(time.perf_counter() - t)
                 w = float(np.median(walls)) / DURATION
-                rows.append((n, dt, irregular, w, sim.stats["mean_iterations"], sim.stats["step_cuts"]))
-                print(f"{name:22s} {'sea' if irregular else 'sin'} nodes {n:3d} dt {dt:5.2f}  {1e3 * w:7.3f} ms/s  "
-                      f"it/step {rows[-1][4]:.2f}  cuts {rows[-1][5]}", flush=True)
-    n, dt, irr, w = (np.array([r[i] for r in rows], float) for i in range(4))
-    irr = irr.astype(bool)
+                rows.append((n, nb, dt, irregular, w, sim.stats["mean_iterations"], sim.stats["step_cuts"]))
+                print(f"{name:22s} {'sea' if irregular else 'sin'} segments {n:3d} dt {dt:5.2f}  {1e3 * w:7.3f} ms/s  "
+                      f"it/step {rows[-1][5]:.2f}  cuts {rows[-1][6]}", flush=True)
+    n, nb, dt, irr, w = (np.array([r[i] for r in rows], float) for i in range(5))
+    steps = DURATION / dt
 
     def resid(p):
-        return np.log(model(p, n, dt, irr)) - np.log(w)
+        return np.log(model(p, n, nb, dt, irr, steps)) - np.log(w)
 
-    fit = least_squares(resid, x0=[0.8, 4.0, 22.0, 40.0, 1e-3], bounds=([0, 0, 0, 1, 1e-8], [50, 200, 200, 1e4, 1]))
+    fit = least_squares(resid, x0=[3.0, 10.0, 20.0, 5.0, 0.3, 2.0, 5.0], bounds=(0, np.inf))
     p = fit.x
     err = np.exp(np.abs(resid(p))) - 1
-    print(f"\nfit over {len(rows)} runs: a0 = {p[0]:.2f} (no sea), {p[1]:.2f} (irregular sea); it(dt) = 1 + {p[2]:.1f} dt; "
-          f"n0 = {p[3]:.1f} nodes; one iteration-unit = {1e6 * p[4]:.2f} µs per step")
+    print(f"\nfit over {len(rows)} runs (µs per step): a0 = {p[0]:.2f}, a_sea = {p[1]:.2f}, it(dt) = 1 + {p[2]:.1f} dt, "
+          f"per iteration {p[3]:.2f} + {p[4]:.3f}/segment + {p[5]:.2f}/rigid body; per run {p[6]:.1f} ms")
     print(f"relative error of the fit: median {100 * np.median(err):.1f} %, max {100 * err.max():.1f} %")
-    cur = np.array([F.step_cost(int(a), b, bool(c)) for a, b, c in zip(n, dt, irr)])
-    scale = np.exp(np.median(np.log(w) - np.log(cur)))
-    err_cur = np.abs(np.log(cur * scale) - np.log(w))
-    print(f"current towenv.fidelity.step_cost on these runs: median error {100 * (np.exp(np.median(err_cur)) - 1):.1f} %, "
-          f"max {100 * (np.exp(err_cur.max()) - 1):.1f} %")
+    its = np.array([r[5] for r in rows])
+    kk = np.sum((its - 1) * dt) / np.sum(dt * dt)
+    print(f"measured Newton iterations per step: least-squares it = 1 + {kk:.1f} dt")
 
 
 if __name__ == "__main__":

@@ -82,18 +82,22 @@ def test_rules_slack_and_nonlinear_flow():
 
 
 def test_pilot_run_rejects_a_step_at_which_the_fish_tumbles():
-    """channel_I31 at 5 %: the linear prediction accepts Δt = 0.075 s, at which the fish tumbles after
-    23 s (the first check's failure); the pilot run sees it and the next candidate, with a smaller step,
-    is chosen. Without the pilot the tumbling step is chosen."""
+    """channel_I31 at 5 %: the linear prediction accepts Δt = 0.075 s with 1.5× the scene's segments, at
+    which the fish tumbles after 23 s (the first check's failure). Offered only that and Δt = 0.05 s (which
+    needs step cuts with those segments), the blind choice is the tumbling one; with the pilot, both are
+    rejected and the fine default is returned. With all candidates the choice passes its own pilot."""
     sc = load("channel_I31")
-    blind = F.select(sc, tolerance=0.05, pilot=False)
+    kw = dict(tolerance=0.05, segment_factors=(1.5,), dt_candidates=(0.05, 0.075))
+    blind = F.select(sc, pilot=False, **kw)
     assert blind.dt == pytest.approx(0.075) and blind.pilot == ""
     ok, note = F.pilot_run(sc, blind.overrides())
     assert not ok and "diverged" in note
-    ch = F.select(sc, tolerance=0.05)
-    assert ch.dt < blind.dt and ch.error <= 0.05
-    assert "failed" in ch.pilot and "passed" in ch.pilot
-    assert F.pilot_run(sc, ch.overrides())[0]
+    ch = F.select(sc, **kw)
+    assert ch.dt == F.fine_time_step(sc) and ch.segment_factor == F.FINE_SEGMENT_FACTOR
+    assert "diverged" in ch.pilot and "step cuts" in ch.pilot
+    best = F.select(sc, tolerance=0.05)
+    assert best.dt > F.fine_time_step(sc) and best.error <= 0.05 and "passed" in best.pilot
+    assert F.pilot_run(sc, best.overrides())[0]
 
 
 def test_series_tows_are_not_capped_at_short_steps():

@@ -330,8 +330,8 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     sinusoidal tow-point excitation. Errors are predicted with the linearised model (module docstring):
     ``e = SAFETY · (|δ_seg(f)| + |δ_Δt(Δt) − δ_Δt(Δt_fine)|)`` with ``δ_seg`` the relative change of the
     statistic with the segment factor ``f`` (vs ×2) and ``δ_Δt`` its relative change from continuous time
-    to Houbolt at Δt (scene segments). Cost = nodes/Δt relative to the fine default (× the measured 2-D
-    saving when planar). ``fixed_segments=True`` keeps the scene's segment counts and chooses Δt alone
+    to Houbolt at Δt (scene segments). Cost = :func:`step_cost` relative to the fine default (× the measured
+    2-D saving when planar). ``fixed_segments=True`` keeps the scene's segment counts and chooses Δt alone
     (its error then counts the time step only). ``pilot=True``: the cheapest candidates are run for
     ``pilot_seconds`` from the scene's start, and the first that completes without a step cut is taken
     (:func:`pilot_run`; ``Fidelity.pilot`` says what happened) — the linear prediction cannot see Newton
@@ -385,7 +385,8 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     planar = why_not_planar is None
     fine_segs = scaled_segments(sc, FINE_SEGMENT_FACTOR)
     irregular = sea is not None
-    fine_cost = step_cost(_n_nodes(fine_segs), fine_dt, irregular)
+    n_bodies = sum(1 for b in sc.bodies if getattr(b, "kind", "") in ("fish", "depressor"))
+    fine_cost = step_cost(_n_nodes(fine_segs), fine_dt, irregular, n_bodies)
     cands = []
     for f in segment_factors:
         segs = scaled_segments(sc, float(f))
@@ -394,7 +395,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
             seg_part = 0.0 if fixed_segments else 1.0
             err = {k: safety * (seg_part * abs(d_seg[float(f)][k]) + abs(d_dt[dt][k] - d_dt[fine_dt][k]))
                    for k in used}
-            cost = step_cost(_n_nodes(segs), dt, irregular) / fine_cost * (PLANAR_COST if planar else 1.0)
+            cost = step_cost(_n_nodes(segs), dt, irregular, n_bodies) / fine_cost * (PLANAR_COST if planar else 1.0)
             cands.append(Fidelity("houbolt", dt, float(f), segs, planar, err, cost, float(tolerance),
                                   seconds=0.0))
     ok = [c for c in cands if c.error <= tolerance]
@@ -414,7 +415,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     elif fixed_segments:
         segs = scaled_segments(sc, 1.0)
         best = Fidelity("houbolt", fine_dt, 1.0, segs, False, {k: 0.0 for k in used},
-                        step_cost(_n_nodes(segs), fine_dt, irregular) / fine_cost, float(tolerance))
+                        step_cost(_n_nodes(segs), fine_dt, irregular, n_bodies) / fine_cost, float(tolerance))
     else:
         best = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
                         float(tolerance))
@@ -495,15 +496,16 @@ def _planar_refusal(scene) -> str | None:
     return None
 
 
-def step_cost(n_nodes: int, dt: float, irregular_sea: bool = False) -> float:
-    """Relative wall time per simulated second of a Houbolt run: ``(a₀ + it(Δt)·(1 + nodes/40))/Δt`` with
-    ``it(Δt) = 1 + 22 Δt`` Newton iterations per step and ``a₀`` the per-step work outside the iteration
-    (tow-point motion, history, recording) in units of one iteration: 0.8, or 4 when an irregular sea drives
-    the vessel (its motion is evaluated every step). Fitted to 36 timed runs of two_part_tow_1 (Table 4.1
-    sinusoid), conventional_tow and two_part_tow_2 in coastal SS4 (Δt 0.01–0.2 s, 3–20 segments:
-    ≈ 7 + 10·it µs per step without a sea, ≈ 35 + 10·it µs with one)."""
-    a0 = 4.0 if irregular_sea else 0.8
-    return (a0 + (1.0 + 22.0 * dt) * (1.0 + n_nodes / 40.0)) / dt
+def step_cost(n_segments: int, dt: float, irregular_sea: bool = False, n_bodies: int = 1) -> float:
+    """Relative wall time per simulated second of a Houbolt run (µs per simulated second on the machine of
+    the fit): ``(a₀ + a_sea + it(Δt)·(b_seg·segments + b_body·bodies)) / Δt`` with ``it(Δt) = 1 + 10 Δt``
+    Newton iterations per step, a₀ = 1.24 µs per step outside the iteration, a_sea = 11.1 µs per step for
+    the vessel motion when an irregular sea drives it, b_seg = 0.32 µs per segment and b_body = 6.2 µs per
+    rigid body per iteration. Fitted by ``python scripts/fidelity_cost_fit.py`` to 105 timed 300 s runs of
+    scenes that are not held out (Table 4.1 sinusoid tows, coastal-sea variants, series_multitow in SS3;
+    Δt 0.01–0.2 s, segment factors 0.5–2): median error 6.7 %, largest 31 %."""
+    per_step = 1.24 + (11.07 if irregular_sea else 0.0) + (1.0 + 10.0 * dt) * (0.323 * n_segments + 6.16 * n_bodies)
+    return per_step / dt
 
 
 #: tolerance used to choose Δt when a scene does not set ``solver.dt`` and no tolerance is given

@@ -570,12 +570,15 @@ class Simulator:
         self.step_count += n
 
     _BLOCK = 2048
+    #: block length (steps) for Δt ≥ 0.05 s: a 2048-step block spans 100–600 s there, and a short run would
+    #: pay for evaluating the vessel motion over the whole block (~10 µs per step in an irregular sea)
+    _BLOCK_COARSE = 256
 
     def _tow_points(self, first, n):
         """Tow-point positions at steps first … first+n−1, evaluated in fixed, aligned blocks of steps (the
         path is analytic; fixed blocks keep every time evaluated in the same vectorised call whatever the
         caller's chunking, so runs stay bit-for-bit reproducible, and amortise vessel-motion evaluation)."""
-        B = self._BLOCK
+        B = self._BLOCK if self.settings.dt < 0.05 else self._BLOCK_COARSE
         cache = self.__dict__.setdefault("_top_blocks", {})
         out = np.empty((n, 3))
         i = 0
