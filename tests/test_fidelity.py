@@ -56,8 +56,12 @@ def test_predicted_time_step_error_matches_the_simulator():
 
 def test_select_meets_its_own_prediction_and_orders_by_cost():
     sc = _deck(amplitude=1.0, period=8.0)
-    loose = F.select(sc, tolerance=0.10)
-    tight = F.select(sc, tolerance=0.005)
+    loose = F.select(sc, tolerance=0.10, pilot=False)
+    tight = F.select(sc, tolerance=0.005, pilot=False)
+    piloted = F.select(sc, tolerance=0.10)
+    # with the pilot: a feasible candidate no cheaper than the blind choice, whose pilot passed
+    assert piloted.error <= 0.10 and piloted.relative_cost >= loose.relative_cost
+    assert "passed" in piloted.pilot and 1.5 * piloted.pilot_error <= 0.10
     for ch in (loose, tight):
         assert ch.method == "houbolt"
         assert ch.error <= ch.tolerance
@@ -83,18 +87,19 @@ def test_rules_slack_and_nonlinear_flow():
 
 def test_pilot_run_rejects_a_step_at_which_the_fish_tumbles():
     """channel_I31 at 5 %: the linear prediction accepts Δt = 0.075 s with 1.5× the scene's segments, at
-    which the fish tumbles after 23 s (the first check's failure). Offered only that and Δt = 0.05 s (which
-    needs step cuts with those segments), the blind choice is the tumbling one; with the pilot, both are
-    rejected and the fine default is returned. With all candidates the choice passes its own pilot."""
+    which the fish tumbled after 23 s in the first check (now, with round-off differences in the tow-point
+    evaluation, it survives on hundreds of step cuts). Offered only that and Δt = 0.05 s (which needs step
+    cuts with those segments too), the blind choice is the bad one; with the pilot, both are rejected and
+    the fine default is returned. With all candidates the choice passes its own pilot."""
     sc = load("channel_I31")
     kw = dict(tolerance=0.05, segment_factors=(1.5,), dt_candidates=(0.05, 0.075))
     blind = F.select(sc, pilot=False, **kw)
     assert blind.dt == pytest.approx(0.075) and blind.pilot == ""
-    ok, note = F.pilot_run(sc, blind.overrides())
-    assert not ok and "diverged" in note
+    ok, note, _ = F.pilot_run(sc, blind.overrides())
+    assert not ok and ("diverged" in note or "step cuts" in note)
     ch = F.select(sc, **kw)
     assert ch.dt == F.fine_time_step(sc) and ch.segment_factor == F.FINE_SEGMENT_FACTOR
-    assert "diverged" in ch.pilot and "step cuts" in ch.pilot
+    assert ch.pilot.count("failed") == 2
     best = F.select(sc, tolerance=0.05)
     assert best.dt > F.fine_time_step(sc) and best.error <= 0.05 and "passed" in best.pilot
     assert F.pilot_run(sc, best.overrides())[0]

@@ -25,12 +25,18 @@ The time-step and segment errors are added (conservative) and multiplied by :dat
 on the *build* cases of ``scripts/fidelity_check.py`` and checked on held-out scenes (docs/fidelity.md).
 
 **Pilot run.** The linear prediction cannot see failures of the nonlinear iteration (a slack cable
-snapping, a body tumbling, a coupling that needs step cuts). The cheapest candidates predicted within
-tolerance are therefore run for :data:`PILOT_SECONDS` from the scene's start (deterministic, same sea
-seed), and the first that completes without a single step cut is chosen; candidates with a Δt at or above
-one that failed are skipped. This replaced a fixed Δt ≤ 0.02 s cap for series tows, whose body–tail
-coupling now converges at long steps (docs/model-notes.md "Series coupling — relaxation"). A selection
-takes 0.05–0.5 s with its pilots.
+snapping, a body tumbling, a coupling that needs step cuts), nor what it does not model (a manoeuvre that
+turns the ship into the sea, snap loads, strong drag nonlinearity). The cheapest candidates predicted within
+tolerance are therefore run from the scene's start through a window of :data:`PILOT_SECONDS` after the
+excitation ramp and any manoeuvre (:func:`pilot_window`; deterministic, same sea seed), and so is the fine
+default once; the first candidate that completes without a single step cut *and* whose output standard deviations over the
+window differ from the fine default's by no more than the tolerance divided by the prediction's safety factor
+(a paired comparison: same forcing, so the difference is the discretisation's, not sampling noise; the factor
+covers the window's ±30 % roughness as an estimate of a long run's) is chosen. Candidates with a Δt at or above one that failed to
+run are skipped; after :data:`MAX_PILOTS` pilots the fine default is returned. This replaced a fixed
+Δt ≤ 0.02 s cap for series tows, whose body–tail coupling now converges at long steps (docs/model-notes.md
+"Series coupling — relaxation"). A selection takes 0.2–3 s with its pilots (the fine default's pilot
+dominates).
 """
 from __future__ import annotations
 
@@ -61,10 +67,11 @@ SAFETY_SLACK = 2.5
 #: linearised error prediction to apply (at U ≈ 0 the body's incidence flips through ±90° every cycle and
 #: its pitch is not a linear function of the motion — docs/linear.md "where it fails")
 FLOW_MARGIN = 2.0
-#: simulated seconds of the pilot run that checks a chosen configuration (:func:`pilot_run`)
-PILOT_SECONDS = 40.0
+#: simulated seconds of the statistics window of the pilot run that checks a chosen configuration
+#: (:func:`pilot_window`, :func:`pilot_run`)
+PILOT_SECONDS = 80.0
 #: at most this many candidates are piloted before falling back to the fine default
-MAX_PILOTS = 4
+MAX_PILOTS = 6
 
 
 def fine_time_step(scene) -> float:
@@ -96,6 +103,7 @@ class Fidelity:
     candidates: list = field(default_factory=list, repr=False)
     seconds: float = 0.0
     pilot: str = ""                 # outcome of the pilot run(s) (empty when none was made)
+    pilot_error: float | None = None  # measured error of the statistics over the pilot window
 
     @property
     def error(self) -> float:
@@ -406,7 +414,9 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
                   "hydrodynamics are strongly nonlinear and the linear error prediction does not apply — ")
     pilot_notes = []
     if ok and pilot:
-        ok = _piloted(sc, sorted(ok, key=lambda c: (c.relative_cost, c.error)), pilot_seconds, pilot_notes)
+        fine_ov = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {}, 1.0, 0.0).overrides()
+        ok = _piloted(sc, sorted(ok, key=lambda c: (c.relative_cost, c.error)), pilot_seconds, pilot_notes,
+                      tuple(used), float(tolerance), fine_ov, safety)
     if ok:
         best = min(ok, key=lambda c: (c.relative_cost, c.error))
         reason = f"cheapest of {len(ok)}/{len(cands)} Houbolt configurations predicted within tolerance"
@@ -442,40 +452,98 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     return best
 
 
-def pilot_run(scene, overrides: dict, seconds: float = PILOT_SECONDS):
-    """Run ``scene`` with ``overrides`` for ``seconds`` from its start (same sea seed, deterministic).
-    Returns ``(passed, note)``: passed when the run completes without a step cut (a halved step means the
-    Newton iteration did not converge at this Δt somewhere — a failure the linear error prediction cannot
-    see: slack snaps, series couplings, a body tumbling)."""
+def pilot_window(scene, seconds: float = PILOT_SECONDS) -> tuple[float, float]:
+    """(start, end) of the pilot's statistics window: 10 s after the excitation ramp and the last manoeuvre
+    have ended (the run's later statistics are those of the steady state), ``seconds`` long."""
+    ves = getattr(scene, "vessel", None)
+    ramp = getattr(ves, "ramp", None)
+    t0 = float(ramp.duration) if ramp is not None and ramp.type != "none" else 0.0
+    for w in (ves.schedule() if ves is not None and hasattr(ves, "schedule") else []):
+        if math.isfinite(w.end_time):
+            t0 = max(t0, float(w.end_time))
+    t0 += 10.0
+    return t0, t0 + float(seconds)
+
+
+def _fish_of(scene) -> str | None:
+    fish = [b.name for b in scene.bodies if getattr(b, "kind", "") == "fish"]
+    return fish[0] if fish else (scene.bodies[-1].name if scene.bodies else None)
+
+
+_PILOT_SERIES = {"fish_heave": lambda r, f: r.bodies[f]["heave"], "fish_pitch": lambda r, f: r.bodies[f]["euler"][:, 1],
+                 "fish_surge": lambda r, f: r.bodies[f]["surge"], "fish_sway": lambda r, f: r.bodies[f]["sway"],
+                 "fish_roll": lambda r, f: r.bodies[f]["euler"][:, 0], "fish_yaw": lambda r, f: r.bodies[f]["euler"][:, 2],
+                 "top_tension": lambda r, f: r.top_tension}
+
+
+def pilot_run(scene, overrides: dict, seconds: float = PILOT_SECONDS, outputs=OUTPUTS):
+    """Run ``scene`` with ``overrides`` from its start through :func:`pilot_window` (same sea seed,
+    deterministic). Returns ``(passed, note, stats)``: ``passed`` when the run completes without a step
+    cut (a halved step means the Newton iteration did not converge at this Δt somewhere — a failure the
+    linear error prediction cannot see: slack snaps, a body tumbling); ``stats`` are the standard
+    deviations of ``outputs`` over the window (None when the run failed)."""
+    from .core.run import simulate
     from .core.simulator import Simulator
     from .errors import SimulationDivergence
+    t0, t1 = pilot_window(scene, seconds)
     try:
         sim = Simulator(scene.with_overrides(overrides))
-        sim.advance(seconds)
+        res = simulate(sim, t1)
     except SimulationDivergence as exc:
-        return False, f"diverged at t = {exc.time:.1f} s ({exc.cause.split(' (')[0]})"
+        return False, f"diverged at t = {exc.time:.1f} s ({exc.cause.split(' (')[0]})", None
     except (ValueError, FloatingPointError) as exc:
-        return False, f"refused: {str(exc)[:120]}"
+        return False, f"refused: {str(exc)[:120]}", None
     st = sim.stats
+    fish = _fish_of(scene)
+    m = res.t >= t0
+    stats = {k: float(np.std(_PILOT_SERIES[k](res, fish)[m])) for k in outputs
+             if k in _PILOT_SERIES and (fish is not None or k == "top_tension")}
     if st["step_cuts"]:
-        return False, f"{st['step_cuts']} step cuts in {seconds:g} s"
-    return True, f"{st['mean_iterations']:.2f} Newton iterations per step, no step cuts"
+        return False, f"{st['step_cuts']} step cuts in {t1:g} s", stats
+    return True, f"{st['mean_iterations']:.2f} Newton iterations per step, no step cuts", stats
 
 
-def _piloted(sc, ordered, seconds, notes):
-    """The candidates (cheapest first) from the first one whose pilot run passes; a candidate is skipped
-    without a run when one with the same or a smaller Δt has already failed."""
+def _pilot_error(stats, ref):
+    errs = [abs(stats[k] / ref[k] - 1.0) for k in ref if k in stats and ref[k] > 0.0]
+    return max(errs) if errs else 0.0
+
+
+def _piloted(sc, ordered, seconds, notes, outputs, tolerance, fine_overrides, safety):
+    """The candidates (cheapest first) from the first one whose pilot run passes — completes without a step
+    cut, and ``safety`` × the difference of its output statistics from the fine default's over the pilot
+    window (same seed: a paired comparison) is within ``tolerance`` — or [] when none of the first
+    MAX_PILOTS does. The safety factor is the prediction's (SAFETY, or SAFETY_SLACK where cables go slack):
+    an 80 s window estimates the discretisation error of a long run's statistics only to some ±30 %, and
+    intermittent snap loads make it rougher.
+    A candidate is skipped without a run when one with the same or a smaller Δt has already failed to
+    run."""
     failed_dt = math.inf
+    ref = None
+    tried = 0
     for i, c in enumerate(ordered):
         if c.dt is not None and c.dt >= failed_dt:
             continue
-        if len([n for n in notes if "failed" in n]) >= MAX_PILOTS:
+        if tried >= MAX_PILOTS:
+            notes.append(f"no candidate passed within {MAX_PILOTS} pilots")
             break
-        passed, note = pilot_run(sc, c.overrides(), seconds)
+        tried += 1
+        passed, note, stats = pilot_run(sc, c.overrides(), seconds, outputs)
         tag = f"Δt = {c.dt:g} s{', 2-D' if c.planar else ''}, segment factor {c.segment_factor:g}"
         if passed:
-            notes.append(f"pilot {seconds:g} s passed ({tag}): {note}")
-            return [c] + [d for d in ordered[i + 1:] if d.dt is None or d.dt < failed_dt]
+            if ref is None:
+                ok_ref, note_ref, ref = pilot_run(sc, fine_overrides, seconds, outputs)
+                if ref is None:
+                    notes.append(f"pilot of the fine default failed ({note_ref}): statistics not compared")
+                    ref = {}
+            err = _pilot_error(stats, ref)
+            c.pilot_error = err
+            if safety * err <= tolerance:
+                notes.append(f"pilot {seconds:g} s passed ({tag}): {note}; statistics within {100 * err:.2g} % "
+                             f"of the fine default's over the window (× safety {safety:g} ≤ tolerance)")
+                return [c] + [d for d in ordered[i + 1:] if d.dt is None or d.dt < failed_dt]
+            notes.append(f"pilot {seconds:g} s failed ({tag}): statistics {100 * err:.2g} % from the fine default's "
+                         f"(× safety {safety:g} > tolerance)")
+            continue
         notes.append(f"pilot {seconds:g} s failed ({tag}): {note}")
         failed_dt = min(failed_dt, c.dt if c.dt is not None else math.inf)
     return []
