@@ -26,7 +26,7 @@ DEFAULT = {
     "two_part_tow_1": (120.0, [0.02, 0.05, 0.1]),
     "conventional_tow": (120.0, [0.02, 0.05, 0.1]),
     "ablow_turn_1km": (600.0, [0.05, 0.1, 0.2]),
-    "series_multitow": (60.0, [0.02, 0.05]),
+    "series_multitow": (60.0, [0.02, 0.05, 0.1]),
     "parallel_multitow": (60.0, [0.02, 0.05]),
 }
 

@@ -110,6 +110,35 @@ CASES = [
 ]
 TOLERANCES = (0.02, 0.05, 0.10)
 
+HISTORY = """### Why the speed-ups are what they are, and the history of this check
+
+Where the choice is slow, the tolerance is tight in a head or bow sea: the fish's statistics then change by
+1–2 % between Δt = 0.01 and 0.05 s, so 2 % allows Δt ≈ 0.03 s (2.4–2.8× faster) and 5 % Δt ≈ 0.05 s
+(3–4×). A coarser step costs more per step — Newton iterations grow from ~1.2 at 0.01 s to ~3 at 0.075 s
+(the predictor's error; the body-angle criterion binds in most steps) — and an irregular sea adds the
+vessel motion (~11 µs) to every step, so the speed-up stays below the ratio of the steps. Where the fish has
+almost no mean flow (conventional_tow at 1.5 m/s in SS5), the flow rule keeps the fine default (1×).
+
+The check has been run in three rounds; each round's held-out cases were defined before its rules were run on
+them, and became "tuned" when the next round's rules were set after looking at them:
+
+* **Round 1** (previous release): SAFETY, the slack and flow rules, a Δt ≤ 0.02 s cap for series tows;
+  27 held-out runs: **96 %** within tolerance, median speed-up **4.5×** (12 of 26 ≥ 5×).
+* **Round 2**: the series cap replaced by the body–tail relaxation of the simulator and a 40 s pilot run that
+  rejects step cuts and divergence (one round-1 channel run had tumbled), Δt candidates up to 0.3 s, the
+  compiled record loop, a refitted cost model; 12 new held-out cases (36 runs): **81 %** within tolerance,
+  median **5.2×** (19 of 36 ≥ 5×). Misses: a slack series tow in SS5 (the window-free pilot cannot see a
+  statistics error), a parallel tow whose turn put the following sea on its bow (the linear predictor models
+  the initial heading), a slack two-part tow at the 10 % step.
+* **Round 3** (this report): the pilot also compares the chosen configuration's statistics with the fine
+  default's over an 80 s window after the ramp and the last manoeuvre (× the prediction's safety factor);
+  10 new held-out cases: **93 %** within tolerance, median **4.7×** (11 of 30 ≥ 5×). Misses: the series tow
+  at 2.5 m/s through its turn at 5 % and 10 % (measured 6.1 % and 14 %; its pilot window saw 2.6 % and 6.6 %:
+  snap loads of its slack sub-cables are intermittent, and an 80 s window under-samples them).
+
+No round met both goals at once: the safety margin trades one against the other, and the remaining lever is
+the cost per step at coarse Δt (fewer Newton iterations), not the selection rules."""
+
 
 def fish_name(scene):
     kinds = [b for b in scene.bodies if getattr(b, "kind", "") == "fish"]
@@ -221,9 +250,7 @@ def write_doc(path, rows, total, duration, t_start, quick):
         lines += ["", f"**Goals (issue 5, held-out cases):** within tolerance in ≥ 90 % of cases — "
                       f"{'**met**' if frac >= 0.9 else '**not met**'} ({100 * frac:.0f} %); ≥ 5× faster than the fine "
                       f"default — {'**met**' if sp >= 5.0 else '**not met**'} on the median ({sp:.2f}×; {n5} of "
-                      f"{len(sps)} runs ≥ 5×). Where the choice is slow it is because the tolerance or a rule (slack, "
-                      "series tow) forbids a coarser model, or because the cost model (nodes/Δt and the Newton "
-                      "iterations' growth with Δt) misjudges fixed per-step costs such as the vessel motion.", ""]
+                      f"{len(sps)} runs ≥ 5×).", "", HISTORY, ""]
     skipped = [r for r in rows if r.get("tol") is None]
     for r in skipped:
         lines.append(f"* not evaluated: {r['case']} — {r['error']}")
