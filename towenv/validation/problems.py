@@ -82,7 +82,7 @@ def series_connector() -> dict:
     text = (
         "**Series (aft-tow-point) coupling can diverge under large tail tensions.** Joining cable sections of "
         "different properties through a small rigid body's `aft_tow_point` (the only way to chain lines "
-        "end-to-end) fails for the Srivastava array in a *steady* 4 m/s tow (tow-point tension "
+        "end-to-end) can fail for the Srivastava array in a *steady* 4 m/s tow (tow-point tension "
         f"{fmt(rows[0][3] / 1e3)} kN): " +
         "; ".join(f"Δt = {dt} s: " + (f"diverged at t = {t:.1f} s ({err.split(': ', 1)[1][:90]}…)" if err else
                                       "completed 60 s") for dt, err, t, _ in rows) +
