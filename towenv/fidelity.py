@@ -566,13 +566,13 @@ def _planar_refusal(scene) -> str | None:
 
 def step_cost(n_segments: int, dt: float, irregular_sea: bool = False, n_bodies: int = 1) -> float:
     """Relative wall time per simulated second of a Houbolt run (µs per simulated second on the machine of
-    the fit): ``(a₀ + a_sea + it(Δt)·(b_seg·segments + b_body·bodies)) / Δt`` with ``it(Δt) = 1 + 8.8 Δt``
-    Newton iterations per step, a₀ = 1.21 µs per step outside the iteration, a_sea = 11.2 µs per step for
-    the vessel motion when an irregular sea drives it, b_seg = 0.32 µs per segment and b_body = 6.3 µs per
+    the fit): ``(a₀ + a_sea + it(Δt)·(b_seg·segments + b_body·bodies)) / Δt`` with ``it(Δt) = 1 + 10 Δt``
+    Newton iterations per step, a₀ = 1.24 µs per step outside the iteration, a_sea = 11.1 µs per step for
+    the vessel motion when an irregular sea drives it, b_seg = 0.32 µs per segment and b_body = 6.2 µs per
     rigid body per iteration. Fitted by ``python scripts/fidelity_cost_fit.py`` to 105 timed 300 s runs of
     scenes that are not held out (Table 4.1 sinusoid tows, coastal-sea variants, series_multitow in SS3;
-    Δt 0.01–0.2 s, segment factors 0.5–2): median error 6.9 %, largest 39 %."""
-    per_step = 1.21 + (11.20 if irregular_sea else 0.0) + (1.0 + 8.8 * dt) * (0.317 * n_segments + 6.34 * n_bodies)
+    Δt 0.01–0.2 s, segment factors 0.5–2): median error 6.7 %, largest 31 %."""
+    per_step = 1.24 + (11.07 if irregular_sea else 0.0) + (1.0 + 10.0 * dt) * (0.323 * n_segments + 6.16 * n_bodies)
     return per_step / dt
 
 

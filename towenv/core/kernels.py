@@ -41,9 +41,6 @@ FAIL_STRETCH = 3       # non-physical strain in a segment
 FAIL_ANGLE = 4         # body pitch reached ±85° inside its attitude chart (guard: re-charting keeps it far below)
 
 FREE = 0
-#: convergence by the estimated remaining error (converged_estimate) needs the last change within this many
-#: tolerances
-CONV_GUARD = 100.0
 PRESCRIBED_TOP = 1
 PRESCRIBED_AFT = 2
 PRESCRIBED_FIXED = 3   # anchor: fixed in space
@@ -1025,23 +1022,6 @@ def aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tan
 
 
 @njit(cache=True)
-def converged_estimate(change, prev, tol):
-    """Convergence test on one quantity of the fixed-point/Newton iteration (Hairer & Wanner, Solving ODEs
-    II, IV.8): the last change is within ``tol``, or the iteration contracts clearly (θ = change/prev ≤ 0.25,
-    change ≤ 100 tol) and the error left in the iterate, estimated as θ/(1 − θ)·change, is within ``tol``.
-    ``prev``: the previous iteration's change (0 on the first iteration, which therefore needs
-    change ≤ tol). Used by ``houbolt_step`` only while no segment is slack (snapping makes θ meaningless)."""
-    if change <= tol:
-        return True
-    if change > CONV_GUARD * tol or not (prev > 0.0):
-        return False
-    theta = change / prev
-    if not (theta <= 0.25):
-        return False
-    return change * theta / (1.0 - theta) <= tol
-
-
-@njit(cache=True)
 def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
@@ -1106,8 +1086,6 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     elem = -1
     it = 0
     maxd = 0.0
-    prev_d = 0.0
-    prev_a = 0.0
     for it in range(1, maxit + 1):
         # --- coefficients at the current iterate -------------------------------------------------
         for a in range(nn):
@@ -1268,12 +1246,10 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             return FAIL_NEWTON, it, -1, 0.0
         maxd = 0.0
         elem = -1
-        any_slack = False
         for s in range(ns):
             tn = tens[s] + dT[s]
-            if tn <= 0.0:
+            if tn < 0.0:
                 tn = 0.0
-                any_slack = True
             d = abs(tn - tens[s])
             if not (d <= maxd):     # also catches NaN
                 maxd = d
@@ -1313,16 +1289,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         if not math.isfinite(dang_max):
             return FAIL_NAN, it, -1, maxd
         place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
-        tol_t = tol_abs + tol_rel * tmax
-        if maxd <= tol_t and dang_max <= ang_tol:
+        if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
             status = OK
             break
-        if (not any_slack and converged_estimate(maxd, prev_d, tol_t)
-                and converged_estimate(dang_max, prev_a, ang_tol)):
-            status = OK
-            break
-        prev_d = maxd
-        prev_a = dang_max
     if status != OK:
         return status, it, elem, maxd
     # --- end-stop contact: exact (the sheave is held at the stop while the stop pushes) --------------

@@ -590,23 +590,6 @@ def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt):
     return kt, kr
 
 
-CONV_GUARD = 100.0
-
-
-def converged_estimate_np(change, prev, tol):
-    """kernels.converged_estimate: the last change within ``tol``, or a clearly contracting iteration
-    (θ = change/prev ≤ 0.25, change ≤ 100 tol) whose estimated remaining error θ/(1 − θ)·change is within
-    ``tol`` (Hairer & Wanner IV.8; prev = 0 on the first iteration)."""
-    if change <= tol:
-        return True
-    if change > CONV_GUARD * tol or not (prev > 0.0):
-        return False
-    theta = change / prev
-    if not (theta <= 0.25):
-        return False
-    return change * theta / (1.0 - theta) <= tol
-
-
 def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     """Twin of ``kernels.houbolt_step``: one Houbolt step (model.md 5.1–5.2) on copies of the state.
 
@@ -687,8 +670,6 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     it = 0
     maxd = 0.0
     elem = -1
-    prev_d = 0.0
-    prev_a = 0.0
     for it in range(1, maxit + 1):
         # 1. coefficients
         vs = houbolt_vel(rs, hist_r, dt)
@@ -773,7 +754,6 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             dT = solve_tension_np(K, rhs)
         except RuntimeError:                      # singular factor
             return fail(FAIL_NEWTON, it, -1, 0.0)
-        any_slack = bool(np.any(tens + dT <= 0.0))
         new = np.maximum(tens + dT, 0.0)
         change = np.abs(new - tens)
         if not np.all(np.isfinite(change)):
@@ -809,17 +789,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             trace.append(dict(r=rs.copy(), tens=tens.copy(), angs=angs.copy(), max_dT=maxd, dang_max=dang_max,
                               tang=seg.tang.copy(), minv=minv.copy(), K=K, rhs=rhs.copy(), dT=dT.copy()))
         # 5. convergence
-        tol_t = tol_abs + tol_rel * tmax
-        if maxd <= tol_t and dang_max <= ang_tol:
+        if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
             status = OK
             break
-        # 5b. or by the estimated remaining error while no segment is slack (kernels.converged_estimate)
-        if not any_slack and converged_estimate_np(maxd, prev_d, tol_t) and converged_estimate_np(dang_max, prev_a,
-                                                                                                 ang_tol):
-            status = OK
-            break
-        prev_d = maxd
-        prev_a = dang_max
     if status != OK:
         return fail(status, it, elem, maxd)
     strain = np.where(np.isinf(ea), 0.0, tens / np.where(np.isinf(ea), 1.0, ea))
