@@ -124,7 +124,8 @@ def test_linearised_model_offered_only_when_loose_and_taut():
 
 @pytest.mark.parametrize("kw, field", [({"tolerance": 0.0}, "tolerance"), ({"tolerance": 1.5}, "tolerance"),
                                        ({"tolerance": 0.05, "outputs": ("bogus",)}, "outputs"),
-                                       ({"tolerance": 0.05, "dt_candidates": (2.0,)}, "dt_candidates")])
+                                       ({"tolerance": 0.05, "dt_candidates": (2.0,)}, "dt_candidates"),
+                                       ({"tolerance": 0.05, "pilot_seconds": 0.0}, "pilot_seconds")])
 def test_bad_input_names_the_field(kw, field):
     with pytest.raises(ValueError, match=field):
         F.select(_deck(), **kw)

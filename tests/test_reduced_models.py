@@ -57,7 +57,7 @@ def test_planar_and_pitch_only_models_reproduce_the_3d_model_on_a_planar_scene(s
 
 @pytest.mark.parametrize("mode", ["planar", "pitch_only"])
 def test_reduced_houbolt_step_matches_twin(mode):
-    from test_twin import EXCITATION, SCENES, _simulator
+    from test_twin import EXCITATION, SCENES, _simulator, kernel_and_twin_step
 
     d = SCENES["two_part"](excitation=EXCITATION)
     if mode == "planar":
@@ -69,13 +69,7 @@ def test_reduced_houbolt_step_matches_twin(mode):
                 b["dof"] = "surge_heave_pitch"
     sim = _simulator(d)
     sim.advance(2.0)
-    top = sim.path.position(np.array([sim.t + sim.dt]))[0]
-    res = twin.houbolt_step_np(sim, sim.dt, top)
-    st, it, el, md = K.houbolt_step(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
-    assert st == K.OK and res.status == twin.OK and it == res.iterations
-    for key in ("hist_r", "tens_hist", "hist_ang", "top_react"):
-        a, b = getattr(res, key), getattr(sim, key)
-        assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(b)), 1e-30), key
+    kernel_and_twin_step(sim)
 
 
 def test_pitch_only_body_holds_roll_and_yaw_in_a_lateral_current():

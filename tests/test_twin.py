@@ -457,6 +457,19 @@ def _top(sim, k=1):
     return sim.path.position(np.array([sim.t + k * sim.dt]))[0]
 
 
+def kernel_and_twin_step(sim):
+    """One Houbolt step of ``sim`` by the kernel (in place) and by the numpy twin from the same state: same
+    status and iterations, states equal to 1e-9 of their size. Returns the twin's step."""
+    top = sim.path.position(np.array([sim.t + sim.dt]))[0]
+    res = twin.houbolt_step_np(sim, sim.dt, top)
+    st, it, el, md = K.houbolt_step(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
+    assert st == K.OK and res.status == twin.OK and it == res.iterations
+    for key in ("hist_r", "tens_hist", "hist_ang", "top_react"):
+        a, b = getattr(res, key), getattr(sim, key)
+        assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(b)), 1e-30), key
+    return res
+
+
 def _assert_same_state(twin_state, sim, rtol):
     assert _rel(twin_state.hist_r, sim.hist_r) < rtol
     assert _rel(twin_state.tens_hist, sim.tens_hist) < rtol

@@ -353,6 +353,9 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     if unknown or not outputs:
         raise ValueError(f"outputs: must be a non-empty subset of fish_heave, fish_pitch, fish_surge, fish_sway, "
                          f"fish_roll, fish_yaw, top_tension, fish_tension; got {outputs!r}")
+    if isinstance(pilot_seconds, bool) or not isinstance(pilot_seconds, (int, float)) or \
+            not (5.0 <= pilot_seconds <= 3600.0):
+        raise ValueError(f"pilot_seconds: must be a window length in [5, 3600] s, got {pilot_seconds!r}")
     for name, vals, lo, hi in (("dt_candidates", dt_candidates, 1e-4, 1.0),
                                ("segment_factors", segment_factors, 0.05, 8.0)):
         v = np.asarray(vals, float)

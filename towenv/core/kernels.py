@@ -1082,6 +1082,11 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
         tens[s] = tp if tp > 0.0 else 0.0
 
+    # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
+    any_aft = False
+    for b in range(nb):
+        if body_aft_node[b] >= 0:
+            any_aft = True
     status = FAIL_NEWTON
     elem = -1
     it = 0
@@ -1134,7 +1139,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                         for m in range(3):
                             sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
                     bnode[a, i, j] += sacc
-        if it == 1:
+        if it == 1 and any_aft:
             # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
             for b in range(nb):
                 c = body_aft_node[b]
@@ -1164,7 +1169,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             # a body towing a tail from its aft tow point: the tail's pull is a load on the body inside the
             # Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ +
             # T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness)
-            for b in range(nb):
+            for b in range(nb if any_aft else 0):
                 c = body_aft_node[b]
                 if body_node[b] != a or c < 0:
                     continue
