@@ -79,10 +79,35 @@ def test_rules_slack_and_nonlinear_flow():
     # the two-part tow's light secondary goes slack in SS4: segments are not reduced
     ch = F.select("two_part_coastal_ss4", tolerance=0.1)
     assert "slack" in ch.reason and ch.segment_factor >= 1.0
-    # the deep tow at U = 0: the fish's incidence flips, the linear prediction does not apply
+    # the deep tow at U = 0: the fish's incidence flips, the linear prediction is not trusted; the pilot
+    # decides, and every candidate's window statistics are far (> 50 %) from the fine default's
     ch = F.select("hover_deep_tow", tolerance=0.1)
     assert ch.dt == F.fine_time_step(load("hover_deep_tow")) and ch.segment_factor == F.FINE_SEGMENT_FACTOR
-    assert "strongly nonlinear" in ch.reason
+    assert "strongly nonlinear" in ch.reason and "pilot 80 s passed" not in ch.pilot and "failed" in ch.pilot
+    assert "2-D" not in ch.reason
+    # without a pilot run nothing else can judge: the fine default, no pilot attempted
+    blind = F.select("hover_deep_tow", tolerance=0.1, pilot=False)
+    assert blind.segment_factor == F.FINE_SEGMENT_FACTOR and blind.pilot == ""
+
+
+def test_low_flow_choice_is_piloted_with_the_larger_safety_factor():
+    """conventional_tow at 1.5 m/s in SS5: the fish's mean flow is below FLOW_MARGIN velocity std, so a
+    cheaper configuration is accepted only through its pilot run, with SAFETY_SLACK and the scene's segments
+    at least — and the 300 s statistics then agree with the fine default's within the tolerance."""
+    sc = load("conventional_tow").with_overrides({
+        "sea": {"code": 5, "convention": "coastal", "heading_deg": 180.0, "seed": 1},
+        "vessel.model": "coastal_survey", "vessel.excitation": None, "vessel.speed": 1.5})
+    ch = F.select(sc, tolerance=0.05)
+    assert "strongly nonlinear" in ch.reason and "passed" in ch.pilot
+    assert ch.segment_factor >= 1.0 and ch.dt > F.fine_time_step(sc)
+    assert F.SAFETY_SLACK * ch.pilot_error <= 0.05
+    fine = F.Fidelity("houbolt", F.fine_time_step(sc), F.FINE_SEGMENT_FACTOR,
+                      F.scaled_segments(sc, F.FINE_SEGMENT_FACTOR), False, {}, 1.0, 0.0)
+    ref, got = simulate(fine.apply(sc), 300.0), simulate(ch.apply(sc), 300.0)
+    for res in (ref, got):
+        res.std = [float(np.std(s[res.t >= 60.0])) for s in (res.bodies["fish"]["heave"],
+                                                               res.bodies["fish"]["euler"][:, 1])]
+    assert np.all(np.abs(np.array(got.std) / np.array(ref.std) - 1.0) <= 0.05), (got.std, ref.std)
 
 
 def test_pilot_run_rejects_a_step_at_which_the_fish_tumbles():
@@ -192,3 +217,15 @@ def test_cli_fidelity(tmp_path):
     assert "Houbolt" in Result.load(out / "result.npz").meta["fidelity"]
     assert main(["simulate", "peer_deck", "--duration", "2", "--fidelity", "0.1", "--out", str(out),
                  "--no-plots", "--quiet"]) == 2      # nothing excites it: a clear error, not a traceback
+
+
+def test_two_d_refused_when_a_lateral_mode_is_unstable():
+    """hover_deep_tow at 2 m/s in a head sea excites nothing laterally, but its towfish has an unstable
+    roll/yaw mode (tests/test_linear.py): the 3-D fine default rolls over after ~150 s, which a 2-D model
+    cannot; 2-D is refused and the reason says why. A head-sea conventional tow (stable) still gets 2-D."""
+    sea = {"sea": {"code": 5, "convention": "coastal", "heading_deg": 180.0, "seed": 1},
+           "vessel.model": "coastal_survey", "vessel.excitation": None}
+    ch = F.select(load("hover_deep_tow").with_overrides({**sea, "vessel.speed": 2.0}), tolerance=0.1, pilot=False)
+    assert not ch.planar and "unstable lateral mode" in ch.reason
+    ok = F.select(load("conventional_tow").with_overrides(sea), tolerance=0.1, pilot=False)
+    assert ok.planar and "unstable" not in ok.reason

@@ -16,7 +16,9 @@ How the error is predicted (no time-domain run is needed for the prediction itse
   rather than guessed.
 * **Segments.** The same linear model built with the candidate segment counts against the fine default's.
 * **2-D.** Chosen when nothing excites the lateral plane (head or following long-crested sea, no lateral
-  current, no sway/yaw/roll excitation, symmetric bodies); its error is round-off (tested).
+  current, no sway/yaw/roll excitation, symmetric bodies) *and* no lateral mode is unstable (the linearised
+  model's damped eigenvalues, :meth:`~towenv.linear.LinearModel.damped_modes`: a growing roll/yaw mode of the
+  towfish grows from round-off in 3-D, which a 2-D model cannot show); its error is then round-off (tested).
 * **Linearised model.** Offered only when the tolerance is at least its measured accuracy against the
   nonlinear simulation (:data:`LINEAR_ERROR_BOUND`, docs/linear.md) and the predicted tensions stay well
   away from slack (mean tension ≥ :data:`SLACK_MARGIN` standard deviations at the top and at the fish).
@@ -49,7 +51,10 @@ import numpy as np
 
 FINE_DT = 0.01
 FINE_SEGMENT_FACTOR = 2.0
-DT_CANDIDATES = (0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3)
+#: time steps tried (s): spaced by ≤ 1.33× below 0.15 s, where head and bow seas put the choice at tight
+#: tolerances (a coarser grid left up to half of the tolerance unused: 0.03 → 0.05 s is a 1.67× step)
+DT_CANDIDATES = (0.01, 0.0125, 0.015, 0.0175, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05, 0.06, 0.075, 0.09,
+                 0.1, 0.125, 0.15, 0.2, 0.25, 0.3)
 SEGMENT_FACTORS = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
 OUTPUTS = ("fish_heave", "fish_pitch")
 #: multiplies the predicted discretisation error (calibrated on the build cases, docs/fidelity.md)
@@ -64,9 +69,15 @@ SLACK_MARGIN = 4.0
 SLACK_NONLINEAR = 2.0
 SAFETY_SLACK = 2.5
 #: the fish's mean relative flow must exceed this many standard deviations of its velocity for the
-#: linearised error prediction to apply (at U ≈ 0 the body's incidence flips through ±90° every cycle and
-#: its pitch is not a linear function of the motion — docs/linear.md "where it fails")
+#: linearised error prediction to be trusted (at U ≈ 0 the body's incidence flips through ±90° every cycle
+#: and its pitch is not a linear function of the motion — docs/linear.md "where it fails"). Below it the
+#: pilot run decides: a candidate needs a passed pilot (with the SAFETY_SLACK factor), segments are not
+#: reduced below the scene's, and without a pilot the fine default is returned
 FLOW_MARGIN = 2.0
+#: growth rate (1/s) above which a lateral mode of the linearised model counts as unstable; such a mode grows
+#: from round-off in the 3-D simulator (at the predicted rate, tests/test_linear.py) and 2-D is refused. At
+#: 1e-3/s it would need ~10 h of simulated time to grow from round-off to a visible amplitude
+LATERAL_GROWTH_LIMIT = 1e-3
 #: simulated seconds of the statistics window of the pilot run that checks a chosen configuration
 #: (:func:`pilot_window`, :func:`pilot_run`)
 PILOT_SECONDS = 80.0
@@ -243,6 +254,18 @@ class _Predictor:
         sd = math.sqrt(var)
         return u_rel / sd if sd > 0 else np.inf
 
+    def unstable_lateral_mode(self, factor):
+        """(growth rate σ (1/s), period (s)) of the fastest-growing mode that lives mainly in the lateral plane
+        (:meth:`towenv.linear.LinearModel.damped_modes`), or None when none grows faster than
+        :data:`LATERAL_GROWTH_LIMIT`."""
+        lam, frac = self.model(factor).damped_modes()
+        for l, f in zip(lam, frac):
+            if l.real <= LATERAL_GROWTH_LIMIT:
+                return None
+            if f >= 0.5:
+                return float(l.real), (2 * math.pi / abs(l.imag) if l.imag != 0 else math.inf)
+        return None
+
     def _sinusoids(self):
         comps = [e for e in (self.scene.vessel.excitation or []) if getattr(e, "type", "") == "sinusoid"]
         if not comps:
@@ -373,7 +396,8 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     margin = pred.slack_margin(FINE_SEGMENT_FACTOR)
     slack = margin < SLACK_NONLINEAR
     flow = pred.flow_margin(FINE_SEGMENT_FACTOR)
-    if slack:
+    low_flow = flow < FLOW_MARGIN
+    if slack or low_flow:
         safety = max(safety, SAFETY_SLACK)
         segment_factors = [f for f in segment_factors if f >= 1.0] or [1.0]
     if fixed_segments:
@@ -393,6 +417,10 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     why_not_planar = lateral_excitation(sc, sea) if allow_planar else "2-D not allowed by the caller"
     if why_not_planar is None:
         why_not_planar = _planar_refusal(sc)
+    lateral = pred.unstable_lateral_mode(FINE_SEGMENT_FACTOR)
+    if lateral is not None and why_not_planar is None and allow_planar:
+        why_not_planar = (f"the linearised model has an unstable lateral mode (growth rate {lateral[0]:.2g}/s, "
+                          f"period {lateral[1]:.3g} s) that a 2-D model cannot have")
     planar = why_not_planar is None
     fine_segs = scaled_segments(sc, FINE_SEGMENT_FACTOR)
     irregular = sea is not None
@@ -411,10 +439,14 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
                                   seconds=0.0))
     ok = [c for c in cands if c.error <= tolerance]
     reason = ""
-    if flow < FLOW_MARGIN:
-        ok = []
+    if low_flow:
         reason = (f"the fish's mean relative flow is only {flow:.2g} × its velocity std (< {FLOW_MARGIN:g}): its "
-                  "hydrodynamics are strongly nonlinear and the linear error prediction does not apply — ")
+                  "hydrodynamics are strongly nonlinear and the linear error prediction is not trusted")
+        if not pilot:
+            ok = []
+            reason += " (and no pilot run was allowed) — "
+        else:
+            reason += f": the pilot decides, safety factor {safety:g}, segments not reduced — "
     pilot_notes = []
     if ok and pilot:
         fine_ov = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {}, 1.0, 0.0).overrides()
@@ -422,7 +454,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
                       tuple(used), float(tolerance), fine_ov, safety)
     if ok:
         best = min(ok, key=lambda c: (c.relative_cost, c.error))
-        reason = f"cheapest of {len(ok)}/{len(cands)} Houbolt configurations predicted within tolerance"
+        reason += f"cheapest of {len(ok)}/{len(cands)} Houbolt configurations predicted within tolerance"
         if pilot:
             reason += " that passed the pilot run"
     elif fixed_segments:
@@ -432,11 +464,15 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     else:
         best = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
                         float(tolerance))
-        reason += "no cheaper configuration is predicted within tolerance: the fine default"
-    if planar:
+        reason += ("no cheaper configuration passed its pilot run: the fine default" if pilot_notes else
+                   "no cheaper configuration is predicted within tolerance: the fine default")
+    if planar and best.planar:
         reason += "; 2-D (nothing excites the lateral plane)"
     elif allow_planar:
         reason += f"; 3-D ({why_not_planar})" if why_not_planar else "; 3-D"
+    if lateral is not None:
+        reason += (f"; warning: an unstable lateral mode (growth rate {lateral[0]:.2g}/s) makes long-run "
+                   "statistics depend on when it reaches large amplitude (in any model that has it)")
     if slack:
         reason += (f"; cables go slack (mean tension only {margin:.2g} std above zero): segments not reduced, "
                    f"safety factor {safety:g}")

@@ -1152,6 +1152,38 @@ class LinearModel:
         w2 = np.sort(w2.real[np.isfinite(w2)])
         return np.sqrt(np.clip(w2, 0.0, None))
 
+    def damped_modes(self, compensator=None):
+        """Eigenvalues of the linearised free motion about the static state, with the drag linearised about
+        the mean flow (the tangent damping ``−∂f/∂v`` at zero oscillation amplitude): ``λ = σ + iω`` (1/s),
+        sorted by decreasing growth rate σ, and for each mode the fraction of its displacement energy in the
+        lateral plane (node sway, body roll and yaw). ``σ > 0`` is an unstable mode: it grows from any
+        perturbation, round-off included (tests/test_linear.py compares σ with the nonlinear simulator's
+        growth rate)."""
+        comp = _comp_param(compensator, self.scene_compensator)
+        sel, Kq, Ku, Mq, Mu, Cadd = self._system_for(comp)
+        n = len(sel)
+        omega = np.array([1e-6])
+        C, _, _ = self._damping(0, np.zeros((1, self.system.n_nodes, 3), complex), np.zeros((1, n), complex),
+                                omega, sel)
+        Minv = np.linalg.inv(Mq)
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        A[n:, :n] = -Minv @ Kq
+        A[n:, n:] = -Minv @ (C[0].real + Cadd)
+        lam, vec = np.linalg.eig(A)
+        lateral = np.zeros(n, bool)
+        pos = -np.ones(self.n_base + 1, np.int64)
+        pos[sel] = np.arange(n)
+        for d in self.node_dof[self.node_dof >= 0]:
+            lateral[pos[d + 1]] = True
+        for b in range(len(self.ang_dof)):
+            lateral[pos[self.ang_dof[b][0]]] = True
+            lateral[pos[self.ang_dof[b][2]]] = True
+        v = np.abs(vec[:n]) ** 2
+        frac = v[lateral].sum(axis=0) / np.maximum(v.sum(axis=0), 1e-300)
+        order = np.argsort(-lam.real, kind="stable")
+        return lam[order], frac[order]
+
 
 def _euler_matrix(ang, E):
     """E with ω = E θ̇ (``euler_rates_to_omega``, linear in the rates)."""
