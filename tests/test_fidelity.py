@@ -229,3 +229,17 @@ def test_two_d_refused_when_a_lateral_mode_is_unstable():
     assert not ch.planar and "unstable lateral mode" in ch.reason
     ok = F.select(load("conventional_tow").with_overrides(sea), tolerance=0.1, pilot=False)
     assert ok.planar and "unstable" not in ok.reason
+
+
+def test_pilot_pruning_keeps_a_loose_tolerance_from_falling_back_to_the_fine_default():
+    """hover_deep_tow at 1.5 m/s in SS3 from 150° (a round-5 case): tried one by one, the cheapest candidates'
+    pilots all missed the statistics at 10 % and used up the pilots, so 10 % got the fine default while 5 %
+    found a choice. A missed pilot now prunes the candidates expected to miss too (no more segments, Δt above
+    its Δt·(target/e)^½): 10 % gets a choice at least as cheap as 5 %'s, confirmed by its own pilot."""
+    sc = load("hover_deep_tow").with_overrides({
+        "sea": {"code": 3, "convention": "coastal", "heading_deg": 150.0, "seed": 4},
+        "vessel.model": "coastal_survey", "vessel.excitation": None, "vessel.speed": 1.5})
+    at5, at10 = F.select(sc, tolerance=0.05), F.select(sc, tolerance=0.10)
+    assert at10.relative_cost < 1.0 and "pilot 80 s passed" in at10.pilot
+    assert at10.relative_cost <= at5.relative_cost
+    assert at10.pilot.count("pilot 80 s") <= F.MAX_PILOTS

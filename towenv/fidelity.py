@@ -35,7 +35,9 @@ default once; the first candidate that completes without a single step cut *and*
 window differ from the fine default's by no more than the tolerance divided by the prediction's safety factor
 (a paired comparison: same forcing, so the difference is the discretisation's, not sampling noise; the factor
 covers the window's ±30 % roughness as an estimate of a long run's) is chosen. Candidates with a Δt at or above one that failed to
-run are skipped; after :data:`MAX_PILOTS` pilots the fine default is returned. This replaced a fixed
+run are skipped; after :data:`MAX_PILOTS` pilots the fine default is returned. Where the fish has little mean
+flow (< :data:`FLOW_MARGIN` standard deviations of its velocity) the linear prediction is not trusted: the
+pilot alone decides, with the larger safety factor :data:`SAFETY_SLACK` and no fewer segments than the scene's. This replaced a fixed
 Δt ≤ 0.02 s cap for series tows, whose body–tail coupling now converges at long steps (docs/model-notes.md
 "Series coupling — relaxation"). A selection takes 0.2–3 s with its pilots (the fine default's pilot
 dominates).
@@ -82,7 +84,7 @@ LATERAL_GROWTH_LIMIT = 1e-3
 #: (:func:`pilot_window`, :func:`pilot_run`)
 PILOT_SECONDS = 80.0
 #: at most this many candidates are piloted before falling back to the fine default
-MAX_PILOTS = 6
+MAX_PILOTS = 8
 
 
 def fine_time_step(scene) -> float:
@@ -555,12 +557,21 @@ def _piloted(sc, ordered, seconds, notes, outputs, tolerance, fine_overrides, sa
     an 80 s window estimates the discretisation error of a long run's statistics only to some ±30 %, and
     intermittent snap loads make it rougher.
     A candidate is skipped without a run when one with the same or a smaller Δt has already failed to
-    run."""
+    run, or when a pilot with at least its segment factor missed the statistics by a factor ``e/target > 1``
+    and the candidate's Δt is above that pilot's Δt × (target/e)^½ (the error of the statistics falls at
+    least as Δt² — Houbolt's period error; its numerical damping falls as Δt³ — so such a candidate is
+    expected to miss as well; ``target`` = tolerance / safety). Without this the cheapest candidates,
+    tried one by one, could use up the MAX_PILOTS and return the fine default at a loose tolerance while a
+    tighter one found a choice."""
     failed_dt = math.inf
+    missed = []          # (Δt, segment factor, error / target) of pilots that missed the statistics
+    target = tolerance / safety
     ref = None
     tried = 0
     for i, c in enumerate(ordered):
         if c.dt is not None and c.dt >= failed_dt:
+            continue
+        if c.dt is not None and any(c.segment_factor <= f and c.dt > dt * ratio ** -0.5 for dt, f, ratio in missed):
             continue
         if tried >= MAX_PILOTS:
             notes.append(f"no candidate passed within {MAX_PILOTS} pilots")
@@ -582,6 +593,8 @@ def _piloted(sc, ordered, seconds, notes, outputs, tolerance, fine_overrides, sa
                 return [c] + [d for d in ordered[i + 1:] if d.dt is None or d.dt < failed_dt]
             notes.append(f"pilot {seconds:g} s failed ({tag}): statistics {100 * err:.2g} % from the fine default's "
                          f"(× safety {safety:g} > tolerance)")
+            if c.dt is not None:
+                missed.append((c.dt, c.segment_factor, err / target))
             continue
         notes.append(f"pilot {seconds:g} s failed ({tag}): {note}")
         failed_dt = min(failed_dt, c.dt if c.dt is not None else math.inf)
