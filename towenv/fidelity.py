@@ -39,7 +39,7 @@ run are skipped; after :data:`MAX_PILOTS` pilots the fine default is returned. W
 flow (< :data:`FLOW_MARGIN` standard deviations of its velocity) the linear prediction is not trusted: the
 pilot alone decides, with the larger safety factor :data:`SAFETY_SLACK` and no fewer segments than the scene's. This replaced a fixed
 Δt ≤ 0.02 s cap for series tows, whose body–tail coupling now converges at long steps (docs/model-notes.md
-"Series coupling — relaxation"). A selection takes 0.2–3 s with its pilots (the fine default's pilot
+"Series coupling — relaxation"). A selection takes 0.2–8 s with its pilots (the fine default's pilot
 dominates).
 """
 from __future__ import annotations
