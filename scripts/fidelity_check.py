@@ -274,9 +274,7 @@ def main(argv=None):
     for label, name, ov, role in cases:
         base = load(name).with_overrides(ov) if ov else load(name)
         fish = fish_name(base)
-        fine_ov = {"solver.dt": F.fine_time_step(base)}
-        for ln, n in F.scaled_segments(base, F.FINE_SEGMENT_FACTOR).items():
-            fine_ov[f"lines.{ln}.segments"] = list(n) if isinstance(n, tuple) else n
+        fine_ov = F.fine_default(base).overrides()
         try:
             ref, ref_wall = run_config(base, fine_ov, duration, repeats)
             ref_stats = fish_stats(ref, fish, t_start)

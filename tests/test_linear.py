@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
+from towenv.core.run import simulate
+from towenv.core.simulator import load
 from towenv.linear import LinearisationError, LinearModel
 from towenv.linear import eqlin
 from towenv.sea import SeaState
 from towenv.validation import hover as H
-from towenv.core.run import simulate
-from towenv.core.simulator import load
 
 RHO, G = 1025.0, 9.81
 

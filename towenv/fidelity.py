@@ -93,6 +93,15 @@ def fine_time_step(scene) -> float:
     return min(FINE_DT, float(scene.solver.dt))
 
 
+def fine_default(scene, outputs=(), tolerance: float = 0.0) -> "Fidelity":
+    """The fine default every error is measured against: Houbolt at :func:`fine_time_step`, FINE_SEGMENT_FACTOR
+    × the scene's segments, 3-D (its predicted error is 0 for ``outputs``)."""
+    from .core.simulator import load
+    sc = load(scene)
+    return Fidelity("houbolt", fine_time_step(sc), FINE_SEGMENT_FACTOR, scaled_segments(sc, FINE_SEGMENT_FACTOR),
+                    False, {k: 0.0 for k in outputs}, 1.0, float(tolerance))
+
+
 def houbolt_operators(omega, dt):
     """Houbolt's discrete acceleration and velocity operators ``A(ω), V(ω)`` (replace ``−ω²`` and ``iω``)."""
     z1 = np.exp(-1j * np.asarray(omega, float) * dt)
@@ -451,7 +460,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
             reason += f": the pilot decides, safety factor {safety:g}, segments not reduced — "
     pilot_notes = []
     if ok and pilot:
-        fine_ov = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {}, 1.0, 0.0).overrides()
+        fine_ov = fine_default(sc).overrides()
         ok = _piloted(sc, sorted(ok, key=lambda c: (c.relative_cost, c.error)), pilot_seconds, pilot_notes,
                       tuple(used), float(tolerance), fine_ov, safety)
     if ok:
@@ -464,10 +473,13 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         best = Fidelity("houbolt", fine_dt, 1.0, segs, False, {k: 0.0 for k in used},
                         step_cost(_n_nodes(segs), fine_dt, irregular, n_bodies) / fine_cost, float(tolerance))
     else:
-        best = Fidelity("houbolt", fine_dt, FINE_SEGMENT_FACTOR, fine_segs, False, {k: 0.0 for k in used}, 1.0,
-                        float(tolerance))
-        reason += ("no cheaper configuration passed its pilot run: the fine default" if pilot_notes else
-                   "no cheaper configuration is predicted within tolerance: the fine default")
+        best = fine_default(sc, used, tolerance)
+        if pilot_notes:
+            reason += "no cheaper configuration passed its pilot run: the fine default"
+        elif low_flow and not pilot:
+            reason += "the fine default"
+        else:
+            reason += "no cheaper configuration is predicted within tolerance: the fine default"
     if planar and best.planar:
         reason += "; 2-D (nothing excites the lateral plane)"
     elif allow_planar:
