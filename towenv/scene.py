@@ -986,6 +986,7 @@ class Solver(_Model):
     max_strain: Num(gt=0) = 0.2
     settle_time: Num(ge=0, unit="s") = 0.0
     planar: bool = False        # 2-D vertical-plane model: lateral node motion, body roll and yaw frozen
+    newton_stop: _choice("change", "estimate") = "change"
 
 
 # =====================================================================================================

@@ -588,6 +588,18 @@ def euler_rates_to_omega(ang, dang, out):
 
 
 @njit(cache=True)
+def euler_rates_to_omega_series(ang, dang, out):
+    """:func:`euler_rates_to_omega` for each row of ``ang``, ``dang`` (n, 3) into ``out`` (n, 3) — one compiled
+    call for a whole recorded time series (the same scalar function per row, so bit-identical to a loop)."""
+    w = np.empty(3)
+    for i in range(ang.shape[0]):
+        euler_rates_to_omega(ang[i], dang[i], w)
+        out[i, 0] = w[0]
+        out[i, 1] = w[1]
+        out[i, 2] = w[2]
+
+
+@njit(cache=True)
 def omega_dot_to_euler_acc(ang, dang, omega, domega, out):
     """Euler-angle accelerations from body angular acceleration (exact z-y-x kinematics, model.md 1.4)."""
     cb = math.cos(ang[0])
@@ -1040,6 +1052,10 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     ang_tol = settings[4]
     # 2-D vertical-plane model (solver.planar): lateral node DOF and body roll/yaw frozen
     planar = settings.shape[0] > 8 and settings[8] != 0.0
+    # Newton stopping on the estimated remaining error (solver.newton_stop = "estimate")
+    stop_estimate = settings.shape[0] > 9 and settings[9] != 0.0
+    prev_d = 0.0
+    prev_a = 0.0
     hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
     (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
      gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
@@ -1251,10 +1267,13 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             return FAIL_NEWTON, it, -1, 0.0
         maxd = 0.0
         elem = -1
+        any_slack = False
         for s in range(ns):
             tn = tens[s] + dT[s]
             if tn < 0.0:
                 tn = 0.0
+            if tn <= 0.0:
+                any_slack = True
             d = abs(tn - tens[s])
             if not (d <= maxd):     # also catches NaN
                 maxd = d
@@ -1294,9 +1313,22 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         if not math.isfinite(dang_max):
             return FAIL_NAN, it, -1, maxd
         place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
-        if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
+        tol_t = tol_abs + tol_rel * tmax
+        if maxd <= tol_t and dang_max <= ang_tol:
             status = OK
             break
+        if stop_estimate and it >= 2 and not any_slack:
+            # remaining error of a contracting iteration ≈ last change · ρ/(1 − ρ), ρ = ratio of the last two
+            # changes; trusted only while ρ ≤ 1/2 (then the estimate is at most the last change) and no
+            # segment is slack (the T ≥ 0 clamp makes the contraction non-smooth)
+            ok_t = maxd <= tol_t or (maxd <= 0.5 * prev_d and maxd * maxd / (prev_d - maxd) <= tol_t)
+            ok_a = dang_max <= ang_tol or (dang_max <= 0.5 * prev_a
+                                           and dang_max * dang_max / (prev_a - dang_max) <= ang_tol)
+            if ok_t and ok_a:
+                status = OK
+                break
+        prev_d = maxd
+        prev_a = dang_max
     if status != OK:
         return status, it, elem, maxd
     # --- end-stop contact: exact (the sheave is held at the stop while the stop pushes) --------------

@@ -176,7 +176,7 @@ class Recorder:
 
     def _fast_finish(self):
         """Turn the raw state records into body and line time series (vectorised)."""
-        from .kernels import euler_rates_to_omega
+        from .kernels import euler_rates_to_omega_series
         from .simulator import physical_attitude
         n = self.n
         s = self.sim.system
@@ -190,10 +190,7 @@ class Recorder:
                 a = self.A[:n, :, bm.rigid_index]
                 d["euler"][:n] = physical_attitude(self.C[:n, bm.rigid_index], a[:, 0])[0]
                 dang = (3 * a[:, 0] - 4 * a[:, 1] + a[:, 2]) / (2 * dt)
-                w = np.empty(3)
-                for i in range(n):
-                    euler_rates_to_omega(a[i, 0], dang[i], w)
-                    d["omega"][i] = w
+                euler_rates_to_omega_series(np.ascontiguousarray(a[:, 0]), dang, d["omega"][:n])
         for lm in s.lines:
             d = self.lines[lm.name]
             d["positions"][:n] = self.R[:n][:, lm.nodes]

@@ -63,6 +63,7 @@ class SolverSettings:
     # bit-identical to the plain Euler-angle runs). Not a scene field: set it on ``Simulator.settings``.
     rechart_pitch: float = K.RECHART_PITCH
     planar: bool = False
+    newton_stop: str = "change"
 
     def array(self):
         if not (0.0 <= self.rechart_pitch <= 1.2):
@@ -70,7 +71,7 @@ class SolverSettings:
         return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
                          self.angle_tolerance, self.max_step_cuts,
                          1.0 if self.tension_solve == "as_published" else 0.0, self.rechart_pitch,
-                         1.0 if self.planar else 0.0], float)
+                         1.0 if self.planar else 0.0, 1.0 if self.newton_stop == "estimate" else 0.0], float)
 
 
 def load(scene, overrides=None):
@@ -123,8 +124,14 @@ class Simulator:
 
     def _check_reduced_models(self):
         """``solver.planar`` (vertical-plane model) and bodies with ``dof = "surge_heave_pitch"``: refuse what
-        they cannot represent, naming the field."""
+        they cannot represent, naming the field; ``solver.newton_stop = "estimate"`` is refused for the other
+        solvers."""
         sc = self.scene
+        if self.settings.newton_stop != "change":
+            method = _get(_get(sc, "solver"), "method", "houbolt")
+            if method != "houbolt" or hasattr(self, "scheme"):
+                raise ValueError(f"solver.newton_stop: 'estimate' exists for the houbolt solver only (solver.method = "
+                                 f"{getattr(self, 'scheme', method)!r}); use 'change'")
         reduced = [b.name for b in self.system.bodies if getattr(b, "rigid_index", -1) >= 0
                    and self.system.bp[b.rigid_index, 29] != 0.0]
         if not self.settings.planar and not reduced:

@@ -620,7 +620,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
        accelerations, Houbolt (4.10) on the Euler angles, the update relaxed by the diagonal factor
        1 + (½Δt² k_θ + (11Δt/12) c_ω)/A_rr,ii (:func:`rotational_stiffness_np`, evaluated at the first
        iterate); aft nodes re-placed;
-    5. converged when max|δT| ≤ tol_abs + tol_rel·max(T) and max|Δangle| ≤ angle_tol.
+    5. converged when max|δT| ≤ tol_abs + tol_rel·max(T) and max|Δangle| ≤ angle_tol; with
+       ``solver.newton_stop = "estimate"`` also, from the second iteration, when each criterion holds for
+       its estimated remaining error |δ_k|ρ/(1 − ρ), ρ = |δ_k|/|δ_{k−1}| ≤ ½, and no segment is slack.
     Then the strain and finiteness checks, the vessel reaction and the history shift.
 
     The linearisations in 2 and the relaxation in 4 change the convergence rate only, not the converged
@@ -633,6 +635,8 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     settings = _settings_array(sim_like.settings)
     tol_abs, tol_rel, maxit, max_strain, ang_tol = (settings[0], settings[1], int(settings[2]), settings[3],
                                                     settings[4])
+    stop_estimate = settings.shape[0] > 9 and settings[9] != 0.0
+    prev_d = prev_a = 0.0
     hist_r = np.array(sim_like.hist_r, float)
     hist_ang = np.array(sim_like.hist_ang, float)
     tens_hist = np.array(sim_like.tens_hist, float)
@@ -788,10 +792,21 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         if trace is not None:
             trace.append(dict(r=rs.copy(), tens=tens.copy(), angs=angs.copy(), max_dT=maxd, dang_max=dang_max,
                               tang=seg.tang.copy(), minv=minv.copy(), K=K, rhs=rhs.copy(), dT=dT.copy()))
-        # 5. convergence
-        if maxd <= tol_abs + tol_rel * tmax and dang_max <= ang_tol:
+        # 5. convergence: on the last change, or (solver.newton_stop = "estimate", from the second
+        # iteration) on the estimated remaining error last change·ρ/(1 − ρ) while ρ ≤ 1/2
+        tol_t = tol_abs + tol_rel * tmax
+        if maxd <= tol_t and dang_max <= ang_tol:
             status = OK
             break
+        if stop_estimate and it >= 2 and not np.any(new <= 0.0):
+            ok_t = maxd <= tol_t or (maxd <= 0.5 * prev_d and maxd * maxd / (prev_d - maxd) <= tol_t)
+            ok_a = dang_max <= ang_tol or (dang_max <= 0.5 * prev_a
+                                           and dang_max * dang_max / (prev_a - dang_max) <= ang_tol)
+            if ok_t and ok_a:
+                status = OK
+                break
+        prev_d = maxd
+        prev_a = dang_max
     if status != OK:
         return fail(status, it, elem, maxd)
     strain = np.where(np.isinf(ea), 0.0, tens / np.where(np.isinf(ea), 1.0, ea))
