@@ -4,6 +4,9 @@
 line, 2-D (vertical plane) or 3-D, and nonlinear time domain (Houbolt) or the linearised frequency-domain
 model, with the predicted relative error of the fish's heave and pitch statistics against the *fine
 default* (Houbolt, Δt = 0.01 s or the scene's Δt if smaller, twice the scene's segments, 3-D) and the predicted cost relative to it.
+A chosen time-domain configuration also lets the Newton iteration stop on its estimated remaining error
+(``solver.newton_stop = "estimate"``, :data:`NEWTON_STOP`): 15–25 % fewer iterations at the long steps chosen
+here, none at the fine default's 0.01 s, which keeps the plain rule.
 
 How the error is predicted (no time-domain run is needed for the prediction itself):
 
