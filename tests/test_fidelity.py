@@ -168,6 +168,12 @@ def test_configure_respects_what_the_user_fixed():
     assert ch is None
     sc, ch = F.configure(fixed, tolerance=0.1)           # asking for it overrides the scene's Δt
     assert ch is not None and sc.solver.dt == ch.dt
+    # the chosen configurations stop Newton on the estimated error; the fine default does not
+    assert ch.newton_stop == F.NEWTON_STOP == "estimate" and sc.solver.newton_stop == "estimate"
+    assert "solver.newton_stop" not in F.fine_default(fixed).overrides()
+    # ... unless the user fixed the rule
+    sc, ch = F.configure(fixed.with_overrides({"solver.newton_stop": "change"}), tolerance=0.1)
+    assert ch is not None and sc.solver.newton_stop == "change"
 
 
 def test_held_out_case_meets_tolerance_in_the_time_domain():

@@ -5,7 +5,7 @@ line, 2-D (vertical plane) or 3-D, and nonlinear time domain (Houbolt) or the li
 model, with the predicted relative error of the fish's heave and pitch statistics against the *fine
 default* (Houbolt, Δt = 0.01 s or the scene's Δt if smaller, twice the scene's segments, 3-D) and the predicted cost relative to it.
 A chosen time-domain configuration also lets the Newton iteration stop on its estimated remaining error
-(``solver.newton_stop = "estimate"``, :data:`NEWTON_STOP`): 15–25 % fewer iterations at the long steps chosen
+(``solver.newton_stop = "estimate"``, :data:`NEWTON_STOP`): up to 25 % fewer iterations at the long steps chosen
 here, none at the fine default's 0.01 s, which keeps the plain rule.
 
 How the error is predicted (no time-domain run is needed for the prediction itself):
@@ -90,9 +90,10 @@ PILOT_SECONDS = 80.0
 MAX_PILOTS = 8
 #: ``solver.newton_stop`` of every chosen configuration: "estimate" lets the Newton iteration stop, from its
 #: second iteration, when the error left in the iterate (estimated from the observed contraction) is within the
-#: solver tolerances. At the long steps chosen here it saves 15–25 % of the iterations and moves the fish
-#: statistics by ≤ 0.2 %; at the fine default's 0.01 s it changes nothing (tests/test_newton_stop.py), so the
-#: fine default keeps the plain rule. Not the simulator's default: at very long steps (≥ 0.5 s) it was less
+#: solver tolerances. At the long steps chosen here it saves 15–25 % of the iterations in head and bow seas
+#: (1–6 % in a following sea or a series tow) and moved the fish statistics by ≤ 0.35 % in 15 measured choices;
+#: at the fine default's 0.01 s it changes nothing (tests/test_newton_stop.py), so the fine default keeps the
+#: plain rule. Not the simulator's default: at very long steps (≥ 0.5 s) it was less
 #: robust (docs/model-notes.md); the choices here are ≤ 0.3 s and each passes a pilot run
 NEWTON_STOP = "estimate"
 
