@@ -94,6 +94,12 @@ def test_estimate_stop_refused_by_other_solvers(method):
         make_simulator(sc, method=method)
 
 
+def test_newton_stop_is_a_solver_keyword():
+    from towenv.core.run import make_simulator
+    assert make_simulator("peer_deck", newton_stop="estimate").settings.newton_stop == "estimate"
+    assert Simulator("peer_deck").settings.newton_stop == "change"
+
+
 def test_newton_stop_rejects_unknown_values():
     from towenv.scene import SceneError
     with pytest.raises(SceneError, match="newton_stop"):
