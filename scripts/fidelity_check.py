@@ -212,7 +212,7 @@ every step takes a second iteration; at 0.06–0.09 s the angle change of the se
 the criterion, so most steps take a third, although the iteration contracts by a factor 5–10 per iteration
 and the error left after the second is already within the criterion. Since round 7 the chosen configurations
 stop on that estimated remaining error (`solver.newton_stop = "estimate"`, :data:`towenv.fidelity.NEWTON_STOP`;
-docs/model-notes.md): 15–25 % fewer iterations at Δt 0.04–0.15 s in head and bow seas (1–6 % in a following
+docs/model-notes.md): 10–25 % fewer iterations at Δt 0.04–0.15 s in head and bow seas (1–6 % in a following
 sea or a series tow), the fish statistics moved by ≤ 0.35 % in 15 measured choices, and nothing saved at the fine default's 0.01 s, where almost every step converges within two
 iterations (tests/test_newton_stop.py) — so the speed-up is not bought by a looser fine default. An
 irregular sea adds the vessel motion (~11–17 µs) to every step. (`python scripts/newton_iterations.py`

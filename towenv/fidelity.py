@@ -90,7 +90,7 @@ PILOT_SECONDS = 80.0
 MAX_PILOTS = 8
 #: ``solver.newton_stop`` of every chosen configuration: "estimate" lets the Newton iteration stop, from its
 #: second iteration, when the error left in the iterate (estimated from the observed contraction) is within the
-#: solver tolerances. At the long steps chosen here it saves 15–25 % of the iterations in head and bow seas
+#: solver tolerances. At the long steps chosen here it saves 10–25 % of the iterations in head and bow seas
 #: (1–6 % in a following sea or a series tow) and moved the fish statistics by ≤ 0.35 % in 15 measured choices;
 #: at the fine default's 0.01 s it changes nothing (tests/test_newton_stop.py), so the fine default keeps the
 #: plain rule. Not the simulator's default: at very long steps (≥ 0.5 s) it was less
