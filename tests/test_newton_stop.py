@@ -104,3 +104,8 @@ def test_newton_stop_rejects_unknown_values():
     from towenv.scene import SceneError
     with pytest.raises(SceneError, match="newton_stop"):
         load("peer_deck").with_overrides({"solver.newton_stop": "sometimes"})
+    # set directly on a simulator's settings (not a scene field path): refused before a step, not read as "change"
+    sim = Simulator("peer_deck")
+    sim.settings.newton_stop = "estimated"
+    with pytest.raises(ValueError, match="solver.newton_stop"):
+        sim.advance(0.1)

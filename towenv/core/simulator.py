@@ -68,6 +68,8 @@ class SolverSettings:
     def array(self):
         if not (0.0 <= self.rechart_pitch <= 1.2):
             raise ValueError(f"rechart_pitch: must be within [0, 1.2] rad (got {self.rechart_pitch!r})")
+        if self.newton_stop not in ("change", "estimate"):
+            raise ValueError(f"solver.newton_stop: must be 'change' or 'estimate' (got {self.newton_stop!r})")
         return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
                          self.angle_tolerance, self.max_step_cuts,
                          1.0 if self.tension_solve == "as_published" else 0.0, self.rechart_pitch,
