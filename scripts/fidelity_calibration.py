@@ -120,10 +120,11 @@ def main(argv=None):
             pilots = {str(w): max(abs(got_ws[w][k] / ref_ws[w][k] - 1.0) for k in meas if ref_ws[w][k] > 0)
                       for w in windows}
             # without pilots select() multiplies by SAFETY_SLACK where cables go slack or the flow is low: undo it
-            raw_factor = F.SAFETY_SLACK if "safety factor" in ch.reason else 1.0
+            raw_factor = ch.prediction_factor
             raw = {k: v / raw_factor for k, v in c.predicted_error.items()}
             row = dict(case=label, f=c.segment_factor, dt=c.dt, planar=planar, pred=raw, pilot=pilot,
-                       pilots=pilots, slack_safety=raw_factor > 1.0, low_flow="strongly nonlinear" in ch.reason,
+                       pilots=pilots, slack_safety="cables go slack" in ch.reason,
+                       low_flow="strongly nonlinear" in ch.reason,
                        step_cuts=cuts,
                        pred_seg=seg_err.get(c.segment_factor, {}), meas=meas, wall=wall, ref_wall=ref_wall)
             rows.append(row)

@@ -428,6 +428,8 @@ def write_doc(path, rows, total, duration, t_start, quick, repeats=1):
         lines.append(f"* not evaluated: {r['case']} — {r['error']}")
     lines += ["", f"Each run: {duration:g} s simulated, statistics from t = {t_start:g} s; error = largest relative "
               "difference of the fish heave and pitch standard deviations from the fine default's, same seed. "
+              "*Predicted*: the linear prediction of that error for the chosen configuration, as the selection "
+              "screened it (× SCREEN_SAFETY when piloted, × SAFETY_SLACK where the fish has little mean flow). "
               "*Pilot window*: the same difference over the chosen configuration's pilot window "
               "(towenv.fidelity.pilot_window), measured during the selection; *selection*: wall time of `select` "
               "including its pilot runs (not included in the speed-up, which compares the runs). *Speed-up*: the "

@@ -67,6 +67,7 @@ def test_select_meets_its_own_prediction_and_orders_by_cost():
     blind_ok = {(c.dt, c.segment_factor) for c in loose.candidates if c.error <= 0.10}
     assert blind_ok <= screened         # the screen admits everything the blind rule does
     blind_factor = F.SAFETY_SLACK if "slack" in loose.reason else F.SAFETY
+    assert loose.prediction_factor == blind_factor and piloted.prediction_factor == F.SCREEN_SAFETY
     for c in piloted.candidates:        # the same prediction, scaled by the two factors
         b = next(d for d in loose.candidates if (d.dt, d.segment_factor) == (c.dt, c.segment_factor))
         assert c.error * blind_factor == pytest.approx(b.error * F.SCREEN_SAFETY, rel=1e-12)

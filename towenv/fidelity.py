@@ -8,6 +8,13 @@ A chosen time-domain configuration also lets the Newton iteration stop on its es
 (``solver.newton_stop = "estimate"``, :data:`NEWTON_STOP`): up to 25 % fewer iterations at the long steps chosen
 here, none at the fine default's 0.01 s, which keeps the plain rule.
 
+Solver. The time-domain candidates are Houbolt configurations: on the speed/accuracy chart
+(docs/speed-accuracy.md) Houbolt's cheapest run at ≤ 1 % and at ≤ 0.1 % error is 1.6–149× cheaper than the
+generalized-α, Newmark and explicit schemes' wherever those reach that accuracy (on the slack two-part tow in
+SS4 no solver, Houbolt included, comes within 1 % of the converged reference), and those schemes model neither
+the compensator and winch nor wave orbital velocities — so no other solver could be the cheapest choice at
+equal accuracy, and none is offered.
+
 How the error is predicted (no time-domain run is needed for the prediction itself):
 
 * **Time step.** The linearised model (:mod:`towenv.linear`) is solved with Houbolt's *discrete*
@@ -153,6 +160,7 @@ class Fidelity:
     pilot: str = ""                 # outcome of the pilot run(s) (empty when none was made)
     pilot_error: float | None = None  # measured error of the statistics over the pilot window
     newton_stop: str = "change"     # solver.newton_stop of the configuration (NEWTON_STOP for the choices)
+    prediction_factor: float = 1.0  # the factor select() applied to the raw linear prediction of the candidates
 
     @property
     def error(self) -> float:
@@ -539,6 +547,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
         else:
             reason += f"; linearised model rejected: mean tension only {margin:.1f} std above zero (slack risk)"
     best.reason = reason
+    best.prediction_factor = float(factor)
     best.candidates = cands
     best.pilot = "; ".join(pilot_notes)
     best.seconds = time.perf_counter() - t0
