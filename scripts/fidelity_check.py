@@ -305,8 +305,9 @@ def fish_name(scene):
     return (kinds[0] if kinds else scene.bodies[-1]).name
 
 
-def fish_stats(res, name, t0):
-    m = res.t >= t0
+def fish_stats(res, name, t0, t1=None):
+    """Standard deviations of the fish heave and pitch from ``t0`` (to ``t1`` when given)."""
+    m = (res.t >= t0) if t1 is None else (res.t >= t0) & (res.t <= t1)
     b = res.bodies[name]
     return {"fish_heave": float(np.std(b["heave"][m])), "fish_pitch": float(np.std(b["euler"][m, 1]))}
 

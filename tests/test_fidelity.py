@@ -84,6 +84,13 @@ def test_select_meets_its_own_prediction_and_orders_by_cost():
     assert sc2.line("cable").segments == loose.segments["cable"]
 
 
+def test_select_refuses_bad_safety_factors():
+    for kw in ({"safety": 0.0}, {"screen_safety": -1.0}, {"pilot_safety": "1.5"}, {"pilot_safety": True}):
+        name = next(iter(kw))
+        with pytest.raises(ValueError, match=rf"{name}: must be a factor in \(0, 100\]"):
+            F.select(_deck(), tolerance=0.05, pilot=False, **kw)
+
+
 def test_rules_slack_and_nonlinear_flow():
     # the two-part tow's light secondary goes slack in SS4: segments are not reduced
     ch = F.select("two_part_coastal_ss4", tolerance=0.1)

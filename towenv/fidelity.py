@@ -431,6 +431,9 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
     if unknown or not outputs:
         raise ValueError(f"outputs: must be a non-empty subset of fish_heave, fish_pitch, fish_surge, fish_sway, "
                          f"fish_roll, fish_yaw, top_tension, fish_tension; got {outputs!r}")
+    for name, val in (("safety", safety), ("screen_safety", screen_safety), ("pilot_safety", pilot_safety)):
+        if isinstance(val, bool) or not isinstance(val, (int, float)) or not (0.0 < val <= 100.0):
+            raise ValueError(f"{name}: must be a factor in (0, 100] multiplying an error estimate, got {val!r}")
     if isinstance(pilot_seconds, bool) or not isinstance(pilot_seconds, (int, float)) or \
             not (5.0 <= pilot_seconds <= 3600.0):
         raise ValueError(f"pilot_seconds: must be a window length in [5, 3600] s, got {pilot_seconds!r}")
@@ -495,7 +498,7 @@ def select(scene, sea_state=None, tolerance: float = 0.05, *, outputs=OUTPUTS, a
                    for k in used}
             cost = step_cost(_n_nodes(segs), dt, irregular, n_bodies) / fine_cost * (PLANAR_COST if planar else 1.0)
             cands.append(Fidelity("houbolt", dt, float(f), segs, planar, err, cost, float(tolerance),
-                                  seconds=0.0, newton_stop=NEWTON_STOP))
+                                  seconds=0.0, newton_stop=NEWTON_STOP, prediction_factor=float(factor)))
     ok = [c for c in cands if c.error <= tolerance]
     reason = ""
     if low_flow:
