@@ -52,17 +52,27 @@ __all__ = ["MEAS_COLUMNS", "COL", "BatchStepper", "TowPointBuffer", "kernel_args
 MEAS_COLUMNS = ("t", "tow_vel_z", "tow_acc_z", "top_tension", "top_tension_ratio", "fish_heave", "fish_depth",
                 "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "min_tension", "tension_ratio",
                 "comp_stroke", "comp_stroke_vel", "end_stop_hits", "comp_stiffness", "comp_damping",
-                "winch_speed", "winch_length_dev", "winch_length", "effort", "time_left")
+                "winch_speed", "winch_length_dev", "winch_length", "effort", "time_left",
+                # motion reference unit at the tow point (relative to the mean track, heading frame)
+                "tow_surge", "tow_sway", "tow_heave", "tow_vel_x", "tow_vel_y", "tow_acc_x", "tow_acc_y",
+                # sheave angle sensor, and the MRU motion projected on the top cable (payout-positive)
+                "cable_angle", "cable_azimuth", "tow_disp_along", "tow_vel_along", "tow_acc_along",
+                # fish heave / pitch about their running means (the reward's and the metrics' deviations)
+                "fish_heave_dev", "fish_pitch_dev", "winch_power")
 COL = {n: i for i, n in enumerate(MEAS_COLUMNS)}
 (M_T, M_TOW_VEL, M_TOW_ACC, M_TOP_T, M_TOP_RATIO, M_HEAVE, M_DEPTH, M_PITCH, M_HEAVE_RATE, M_PITCH_RATE, M_MIN_T,
  M_T_RATIO, M_STROKE, M_STROKE_VEL, M_HITS, M_K, M_B, M_WSPEED, M_WLEN_DEV, M_WLEN, M_EFFORT,
- M_TIME_LEFT) = range(len(MEAS_COLUMNS))
+ M_TIME_LEFT, M_SURGE, M_SWAY, M_TOW_HEAVE, M_TOW_VX, M_TOW_VY, M_TOW_AX, M_TOW_AY, M_CABLE_ANGLE, M_CABLE_AZ,
+ M_DISP_ALONG, M_VEL_ALONG, M_ACC_ALONG, M_HEAVE_DEV, M_PITCH_DEV, M_WPOWER) = range(len(MEAS_COLUMNS))
 
-#: per-copy reference values (float64 (B, NREF)), set by the caller at reset
-(R_ZREF, R_TREF, R_TOPINV, R_HALF_STROKE, R_VMAX, R_L0, R_HITS, R_STEPS, R_MAXSTEPS, R_EFFORT) = range(10)
-NREF = 10
+#: per-copy reference values (float64 (B, NREF)), set by the caller at reset: ... R_MRU_DELAY = MRU output
+#: delay (whole physics steps), R_MEAN_TAU = time constant of the running means (s; 0 = no running mean:
+#: the deviations are then about the steady-tow values), R_HMEAN / R_PMEAN = the running means (state)
+(R_ZREF, R_TREF, R_TOPINV, R_HALF_STROKE, R_VMAX, R_L0, R_HITS, R_STEPS, R_MAXSTEPS, R_EFFORT, R_MRU_DELAY,
+ R_MEAN_TAU, R_HMEAN, R_PMEAN, R_PITCH0) = range(15)
+NREF = 15
 #: actuator kinds: what the command columns U[:, 0:2] mean
-ACT_NONE, ACT_COMP_GAINS, ACT_WINCH_SPEED = 0, 1, 2
+ACT_NONE, ACT_COMP_GAINS, ACT_WINCH_SPEED, ACT_COMP_COMMAND = 0, 1, 2, 3
 #: tow-point blocks (physics steps); the buffer holds two consecutive blocks
 BLOCK = 128
 #: status of a copy whose tow-point buffer does not cover the step (Python refills it and re-runs)
@@ -88,7 +98,13 @@ def _gather_arrays(sim, body, inv_seg):
     wsegs = np.zeros(0, np.int64)
     if sim.winch[K.W_MODE] > 0:
         wsegs = np.asarray(s.line(sim.winch_line).segments, np.int64)
-    idx = np.array([int(s.top_node), int(bm.node), int(bm.rigid_index), comp_node], np.int64)
+    ctop = int(s.cable_top_node)
+    below = -1                          # the node below the cable's top node (the sheave angle sensor)
+    for ln in s.lines:
+        if len(ln.nodes) > 1 and int(ln.nodes[0]) == ctop:
+            below = int(ln.nodes[1])
+            break
+    idx = np.array([int(s.top_node), int(bm.node), int(bm.rigid_index), comp_node, ctop, below], np.int64)
     return (sim.hist_r, sim.hist_ang, sim.body_chart, sim.tens_hist, sim.top_react, sim.cstate, sim.comp, sim.winch,
             sim.wstate, s.l0, idx, wsegs, np.ascontiguousarray(inv_seg, dtype=np.float64))
 
@@ -101,18 +117,74 @@ def _signature(sim):
 # kernels
 # ----------------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c):
+def _mru(blk, mblk, o, dt, out):
+    """Motion reference unit at buffer row ``o`` (clamped at 0): tow-point displacement, velocity and
+    acceleration relative to the mean track, in global axes (out[0:3], [3:6], [6:9]) — the same backward
+    differences as the vertical IMU channels — and the mean-track heading (out[9])."""
+    o0 = max(o, 0)
+    o1 = max(o - 1, 0)
+    o2 = max(o - 2, 0)
+    for i in range(3):
+        d0 = blk[o0, i] - mblk[o0, i]
+        d1 = blk[o1, i] - mblk[o1, i]
+        d2 = blk[o2, i] - mblk[o2, i]
+        out[i] = d0
+        out[3 + i] = (3.0 * d0 - 4.0 * d1 + d2) / (2.0 * dt)
+        out[6 + i] = (d0 - 2.0 * d1 + d2) / (dt * dt)
+    out[9] = mblk[o0, 3]
+
+
+@njit(cache=True)
+def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c, blk, mblk, o, n):
+    """Fill measurement row ``out`` of one copy after ``n`` physics steps; the last step is row ``o`` of the
+    copy's tow-point buffers ``blk`` (positions) / ``mblk`` (mean track x, y, z, heading)."""
     hist_r, hist_ang, chart, tens_hist, top_react, cstate, comp, winch, wstate, l0, idx, wsegs, inv_seg = g
     top = idx[0]
     node = idx[1]
     ri = idx[2]
     cn = idx[3]
+    ctop = idx[4]
+    below = idx[5]
     z0 = hist_r[0, top, 2]
     z1 = hist_r[1, top, 2]
     z2 = hist_r[2, top, 2]
     out[M_T] = t
-    out[M_TOW_VEL] = (3.0 * z0 - 4.0 * z1 + z2) / (2.0 * dt)
-    out[M_TOW_ACC] = (z0 - 2.0 * z1 + z2) / (dt * dt)
+    # motion reference unit (delayed by R_MRU_DELAY physics steps)
+    mru = np.empty(10)
+    _mru(blk, mblk, o - int(ref[R_MRU_DELAY]), dt, mru)
+    cp = math.cos(mru[9])
+    sp = math.sin(mru[9])
+    out[M_TOW_VEL] = mru[5]
+    out[M_TOW_ACC] = mru[8]
+    out[M_SURGE] = cp * mru[0] + sp * mru[1]
+    out[M_SWAY] = -sp * mru[0] + cp * mru[1]
+    out[M_TOW_HEAVE] = mru[2]
+    out[M_TOW_VX] = cp * mru[3] + sp * mru[4]
+    out[M_TOW_VY] = -sp * mru[3] + cp * mru[4]
+    out[M_TOW_AX] = cp * mru[6] + sp * mru[7]
+    out[M_TOW_AY] = -sp * mru[6] + cp * mru[7]
+    # sheave angle sensor: direction of the top cable segment (from the sheave down the cable)
+    if below >= 0:
+        ex = hist_r[0, below, 0] - hist_r[0, ctop, 0]
+        ey = hist_r[0, below, 1] - hist_r[0, ctop, 1]
+        ez = hist_r[0, below, 2] - hist_r[0, ctop, 2]
+        en = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if en > 0.0:
+            ex /= en
+            ey /= en
+            ez /= en
+        out[M_CABLE_ANGLE] = math.atan2(-ez, math.sqrt(ex * ex + ey * ey))
+        out[M_CABLE_AZ] = math.atan2(-sp * ex + cp * ey, -(cp * ex + sp * ey))
+        # along-cable motion, payout-positive: the tow point moving away from the cable needs payout
+        out[M_DISP_ALONG] = -(mru[0] * ex + mru[1] * ey + mru[2] * ez)
+        out[M_VEL_ALONG] = -(mru[3] * ex + mru[4] * ey + mru[5] * ez)
+        out[M_ACC_ALONG] = -(mru[6] * ex + mru[7] * ey + mru[8] * ez)
+    else:
+        out[M_CABLE_ANGLE] = 0.0
+        out[M_CABLE_AZ] = 0.0
+        out[M_DISP_ALONG] = 0.0
+        out[M_VEL_ALONG] = 0.0
+        out[M_ACC_ALONG] = 0.0
     tt = math.sqrt(top_react[0] * top_react[0] + top_react[1] * top_react[1] + top_react[2] * top_react[2])
     out[M_TOP_T] = tt
     out[M_TOP_RATIO] = tt / ref[R_TREF]
@@ -137,6 +209,16 @@ def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c):
     else:
         out[M_PITCH] = 0.0
         out[M_PITCH_RATE] = 0.0
+    # running means (exponential, time constant R_MEAN_TAU; updated once per control step) and deviations
+    tau = ref[R_MEAN_TAU]
+    if tau > 0.0 and n > 0:
+        f = min(1.0, n * dt / tau)
+        if out[M_HEAVE] == out[M_HEAVE]:
+            ref[R_HMEAN] += f * (out[M_HEAVE] - ref[R_HMEAN])
+        if out[M_PITCH] == out[M_PITCH]:
+            ref[R_PMEAN] += f * (out[M_PITCH] - ref[R_PMEAN])
+    out[M_HEAVE_DEV] = out[M_HEAVE] - ref[R_HMEAN]
+    out[M_PITCH_DEV] = out[M_PITCH] - (ref[R_PMEAN] if tau > 0.0 else ref[R_PITCH0])
     ns = tens_hist.shape[1]
     tmin = math.inf
     rmax = tt * ref[R_TOPINV]
@@ -174,24 +256,28 @@ def _measure_copy(g, ref, dt, t, out, w3a, w3b, w3c):
         out[M_WSPEED] = v
         out[M_WLEN_DEV] = length - ref[R_L0]
         out[M_WLEN] = length
+        out[M_WPOWER] = -tt * wstate[K.WS_V]          # > 0 when the winch hauls in against the top tension
     else:
         out[M_WSPEED] = 0.0
         out[M_WLEN_DEV] = 0.0
         out[M_WLEN] = 0.0
+        out[M_WPOWER] = 0.0
     out[M_EFFORT] = out[M_WSPEED] if ref[R_EFFORT] == 1.0 else 0.0
     out[M_TIME_LEFT] = 1.0 - ref[R_STEPS] / ref[R_MAXSTEPS]
 
 
 @njit(cache=True)
-def _copy_step(item, g, n, dt, tops, t0, kind, u0, u1, ref, step_count, out, res):
+def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count, out, res):
     comp = g[6]
     winch = g[7]
     if kind == ACT_COMP_GAINS:
         comp[K.C_K] = u0
         comp[K.C_B] = u1
+    elif kind == ACT_COMP_COMMAND:
+        comp[K.C_CMD] = u0
     elif kind == ACT_WINCH_SPEED:
         winch[K.W_VCMD] = u0
-    st, k, el, md = K.advance(n, dt, tops, *item[0], t0, item[1])
+    st, k, el, md = K.advance(n, dt, blk[off:off + n], *item[0], t0, item[1])
     res[0] = st
     res[1] = k
     res[2] = el
@@ -200,10 +286,10 @@ def _copy_step(item, g, n, dt, tops, t0, kind, u0, u1, ref, step_count, out, res
         w3a = np.empty(3)
         w3b = np.empty(3)
         w3c = np.empty(3)
-        _measure_copy(g, ref, dt, (step_count + n) * dt, out, w3a, w3b, w3c)
+        _measure_copy(g, ref, dt, (step_count + n) * dt, out, w3a, w3b, w3c, blk, mblk, off + n - 1, n)
 
 
-def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, base, end, count, kind, U, refs, res, M):
+def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, mblk, base, end, count, kind, U, refs, res, M):
     """Advance every copy b with ``nsteps[b] >= 0`` by that many steps from step ``count[b]`` (tow points
     from ``blk[b]``, whose first row is step ``base[b]``, valid up to step ``end[b]`` excluded); returns the
     number of copies not OK (``NEED_TOPS``: the buffer does not cover the steps — nothing done)."""
@@ -221,8 +307,8 @@ def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, base, end, count
             continue
         if count_step:
             refs[b, R_STEPS] += 1.0
-        _copy_step(items[np.int64(b)], gathers[np.int64(b)], n, dt, blk[b, off:off + n], count[b] * dt, kind, U[b, 0], U[b, 1],
-                   refs[b], count[b], M[b], res[b])
+        _copy_step(items[np.int64(b)], gathers[np.int64(b)], n, dt, blk[b], mblk[b], off, count[b] * dt, kind,
+                   U[b, 0], U[b, 1], refs[b], count[b], M[b], res[b])
         if res[b, 0] == K.OK:
             count[b] += n
         else:
@@ -326,16 +412,21 @@ class TowPointBuffer:
         E = np.exp(1j * P) * vm._a
         return E, cached[1:]
 
-    def block(self, first, count):
+    def block(self, first, count, mean=False):
         """Positions (count, 3) of steps first … first+count−1. The phase recurrence restarts from an exact
-        evaluation at every multiple of BLOCK, so a step's value does not depend on ``first``/``count``."""
+        evaluation at every multiple of BLOCK, so a step's value does not depend on ``first``/``count``.
+        With ``mean=True`` also the mean track (count, 4): x, y, z and heading (rad) of the same steps."""
         out = np.empty((count, 3))
         s = first
         while s < first + count:
             end = min((s // BLOCK + 1) * BLOCK, first + count)
             out[s - first:end - first] = self._aligned(s, end - s)
             s = end
-        return out
+        if not mean:
+            return out
+        t = np.arange(first, first + count) * self.sim.settings.dt
+        x, psi, _ = self.path.mean_path(t)
+        return out, np.column_stack([x, psi])
 
     def _aligned(self, first, count):
         """Steps first … first+count−1 inside one aligned block (anchor = the block's first step)."""
@@ -387,6 +478,7 @@ class BatchStepper:
         self._end = np.zeros(B, np.int64)
         self._count = np.zeros(B, np.int64)
         self._blk = np.zeros((B, 2 * BLOCK, 3))
+        self._mblk = np.zeros((B, 2 * BLOCK, 4))       # mean track x, y, z and heading of the same steps
         self._filled = np.zeros(B, bool)
         self._py = [None] * B
         self._items = None
@@ -461,14 +553,15 @@ class BatchStepper:
         tp = self._tp[i]
         if not self._filled[i] or first < base or first >= end:
             base = (first // BLOCK) * BLOCK
-            self._blk[i, :BLOCK] = tp.block(base, BLOCK)
+            self._blk[i, :BLOCK], self._mblk[i, :BLOCK] = tp.block(base, BLOCK, mean=True)
             end = base + BLOCK
             self._filled[i] = True
         if first + n > end:
             if end == base + 2 * BLOCK:                     # shift: the second block becomes the first
                 self._blk[i, :BLOCK] = self._blk[i, BLOCK:]
+                self._mblk[i, :BLOCK] = self._mblk[i, BLOCK:]
                 base += BLOCK
-            self._blk[i, BLOCK:] = tp.block(base + BLOCK, BLOCK)
+            self._blk[i, BLOCK:], self._mblk[i, BLOCK:] = tp.block(base + BLOCK, BLOCK, mean=True)
             end = base + 2 * BLOCK
         self._base[i], self._end[i] = base, end
 
@@ -491,7 +584,7 @@ class BatchStepper:
             ns.fill(-1)
             ns[active] = n
         kern = _step_batch_parallel if self.parallel else _step_batch
-        nbad = kern(items, gathers, ns, 1, self._dt, self._blk, self._base, self._end, self._count, kind, self.U,
+        nbad = kern(items, gathers, ns, 1, self._dt, self._blk, self._mblk, self._base, self._end, self._count, kind, self.U,
                     self.refs, self._res, self.M)
         failures = {}
         if nbad:
@@ -502,7 +595,7 @@ class BatchStepper:
                     self._refill(int(i), int(self._count[i]) + 1, n)
                 ns2 = np.full(self.num_copies, -1, np.int64)
                 ns2[need] = n
-                kern(items, gathers, ns2, 1, self._dt, self._blk, self._base, self._end, self._count, kind, self.U,
+                kern(items, gathers, ns2, 1, self._dt, self._blk, self._mblk, self._base, self._end, self._count, kind, self.U,
                      self.refs, res, self.M)
             for i in np.flatnonzero((ns >= 0) & (res[:, 0] != K.OK)):
                 exc = self._finish_copy(int(i), n, kind)
@@ -561,7 +654,7 @@ class BatchStepper:
         ns = np.full(self.num_copies, -1, np.int64)
         ns[i] = n
         for _ in range(2):
-            _step_batch(items, gathers, ns, count_step, self._dt, self._blk, self._base, self._end, self._count, kind,
+            _step_batch(items, gathers, ns, count_step, self._dt, self._blk, self._mblk, self._base, self._end, self._count, kind,
                         self.U, self.refs, self._res, self.M)
             if self._res[i, 0] != NEED_TOPS:
                 return

@@ -81,8 +81,17 @@ class TowEnv(gym.Env):
                  slack_tension: float = 1.0, over_tension_fraction: float = 0.5,
                  breaking_load: float | Mapping[str, float] | None = None, floor_depth: float | None = 80.0,
                  body: str = "fish", sim_overrides: Mapping[str, Any] | None = None,
-                 fidelity: float | None = None, render_mode: str | None = None):
+                 fidelity: float | None = None, render_mode: str | None = None,
+                 mru_delay: float = 0.0, mean_time_constant: float | None = 30.0):
         super().__init__()
+        if not (isinstance(mru_delay, (int, float)) and math.isfinite(mru_delay) and 0.0 <= mru_delay <= 5.0):
+            raise ValueError(f"mru_delay must be in [0, 5] s (got {mru_delay!r})")
+        if mean_time_constant is not None and not (isinstance(mean_time_constant, (int, float))
+                                                   and math.isfinite(mean_time_constant) and mean_time_constant > 0):
+            raise ValueError(f"mean_time_constant must be > 0 s, or None for deviations about the steady tow "
+                             f"(got {mean_time_constant!r})")
+        self.mru_delay = float(mru_delay)
+        self.mean_time_constant = None if mean_time_constant is None else float(mean_time_constant)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None "
                              f"(got {render_mode!r})")
@@ -135,6 +144,9 @@ class TowEnv(gym.Env):
                           f"using {self.substeps} physics steps per control step (control period "
                           f"{self.substeps * dt:g} s)", stacklevel=2)
         self.dt = self.substeps * self.physics_dt           # control period (MuJoCo frame_skip convention)
+        if round(self.mru_delay / self.physics_dt) > BT.BLOCK // 2:
+            raise ValueError(f"mru_delay must be at most {BT.BLOCK // 2} physics steps "
+                             f"({BT.BLOCK // 2 * self.physics_dt:g} s at dt = {self.physics_dt:g} s; got {self.mru_delay!r})")
         self.episode_seconds = float(episode_seconds)
         self.max_steps = max(1, int(round(episode_seconds / self.dt)))
         self.metadata = dict(self.metadata, render_fps=max(1, int(round(1.0 / self.dt))))
@@ -328,6 +340,9 @@ class TowEnv(gym.Env):
         ref[BT.R_TOPINV] = top_inv
         ref[BT.R_HALF_STROKE] = ref[BT.R_VMAX] = 1.0
         ref[BT.R_MAXSTEPS] = self.max_steps
+        ref[BT.R_MRU_DELAY] = round(self.mru_delay / self.physics_dt)
+        ref[BT.R_MEAN_TAU] = 0.0 if self.mean_time_constant is None else self.mean_time_constant
+        ref[BT.R_PITCH0] = float(sim.body_state(self.body)["euler"][1])
         self._actuator_refs(ref, rows.amap[i])
         st.set_copy(i, sim, self.body, self._inv_seg)
         rows.prev_action[i] = self._reset_action()
@@ -385,7 +400,10 @@ class TowEnv(gym.Env):
         return lay
 
     _BASE_KEYS = ("t", "tow_vel_z", "tow_acc_z", "top_tension", "top_tension_ratio", "fish_heave", "fish_depth",
-                  "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "min_tension", "tension_ratio", "time_left")
+                  "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "min_tension", "tension_ratio", "time_left",
+                  "tow_surge", "tow_sway", "tow_heave", "tow_vel_x", "tow_vel_y", "tow_acc_x", "tow_acc_y",
+                  "cable_angle", "cable_azimuth", "tow_disp_along", "tow_vel_along", "tow_acc_along",
+                  "fish_heave_dev", "fish_pitch_dev")
 
     def _row_dict(self, row, action, preview=None) -> dict:
         """A measurement row as the dict ``m`` of :data:`~towenv.envs.pieces.MEASUREMENTS` (for custom

@@ -32,8 +32,9 @@ class CompensatorGainsEnv(TowEnv):
     the log map when a scene bound is 0 (default 1e-3 × the upper bound). The scene's compensator is
     put in ``passive`` mode (the gains act only there)."""
 
-    DEFAULT_OBSERVATIONS = ("tow_vel_z", "tow_acc_z", "top_tension", "comp_stroke", "comp_stroke_vel",
-                            "fish_heave", "fish_pitch", "fish_heave_rate", "fish_pitch_rate", "last_action")
+    DEFAULT_OBSERVATIONS = ("tow_heave", "tow_vel_z", "tow_acc_z", "tow_vel_along", "top_tension", "comp_stroke",
+                            "comp_stroke_vel", "fish_heave_dev", "fish_pitch_dev", "fish_heave_rate", "fish_pitch_rate",
+                            "last_action")
     ACTION_DIM = 2
     ACT_KIND = BT.ACT_COMP_GAINS
     ACTUATOR_KEYS = ("comp_stroke", "comp_stroke_vel", "end_stop_hits", "comp_stiffness", "comp_damping", "effort")

@@ -40,8 +40,8 @@ PITCH_RATE_LIMIT = math.radians(float(RATE_LIMITS["pitch"][0]))
 #: Keys of the per-control-step measurement dict ``m`` (SI units; z up, pitch + nose down).
 MEASUREMENTS = {
     "t": "simulated time (s)",
-    "tow_vel_z": "tow-point vertical velocity (m/s), from the prescribed tow-point history (IMU)",
-    "tow_acc_z": "tow-point vertical acceleration (m/s^2), backward second difference (IMU)",
+    "tow_vel_z": "MRU: tow-point vertical velocity (m/s), from the prescribed tow-point history",
+    "tow_acc_z": "MRU: tow-point vertical acceleration (m/s^2), backward second difference",
     "top_tension": "tow-point cable force magnitude (N)",
     "top_tension_ratio": "top tension / its static (steady-tow) value",
     "fish_heave": "towed-body z minus its steady-tow z (m, + up; depth deviation = -heave)",
@@ -56,6 +56,21 @@ MEASUREMENTS = {
     "end_stop_hits": "compensator end-stop hits during this control step  [compensator]",
     "winch_speed": "winch payout speed / max speed (payout > 0)  [winch]",
     "winch_length_dev": "winch-line length minus its initial length (m)  [winch]",
+    "winch_power": "winch mechanical power -T·v (W; > 0 hauling in against the top tension)  [winch]",
+    "tow_surge": "MRU: tow-point displacement along the mean heading, relative to the mean track (m)",
+    "tow_sway": "MRU: tow-point displacement to port, relative to the mean track (m)",
+    "tow_heave": "MRU: tow-point vertical displacement from its mean height (m, + up)",
+    "tow_vel_x": "MRU: tow-point velocity along the mean heading, relative to the mean track (m/s)",
+    "tow_vel_y": "MRU: tow-point velocity to port (m/s)",
+    "tow_acc_x": "MRU: tow-point acceleration along the mean heading (m/s^2)",
+    "tow_acc_y": "MRU: tow-point acceleration to port (m/s^2)",
+    "cable_angle": "sheave angle sensor: top-cable depression angle below the horizontal (rad)",
+    "cable_azimuth": "sheave angle sensor: top-cable azimuth from dead astern (rad, + to port)",
+    "tow_disp_along": "MRU displacement projected on the top cable, payout-positive (m)",
+    "tow_vel_along": "MRU velocity projected on the top cable, payout-positive (m/s): the payout that cancels it",
+    "tow_acc_along": "MRU acceleration projected on the top cable, payout-positive (m/s^2)",
+    "fish_heave_dev": "fish heave about its running mean (m; about 0 with no running mean)",
+    "fish_pitch_dev": "fish pitch about its running mean (rad; about the steady-tow trim with no running mean)",
 }
 
 
@@ -79,6 +94,18 @@ _D = math.radians
 CHANNELS: dict[str, Channel] = {c.name: c for c in [
     Channel("tow_vel_z", "tow_vel_z", "m/s", 1.0, -10.0, 10.0, "tow-point vertical velocity (IMU)"),
     Channel("tow_acc_z", "tow_acc_z", "m/s^2", 1.0, -30.0, 30.0, "tow-point vertical acceleration (IMU)"),
+    Channel("tow_surge", "tow_surge", "m", 1.0, -20.0, 20.0, "MRU tow-point surge displacement"),
+    Channel("tow_sway", "tow_sway", "m", 1.0, -20.0, 20.0, "MRU tow-point sway displacement"),
+    Channel("tow_heave", "tow_heave", "m", 1.0, -20.0, 20.0, "MRU tow-point heave displacement"),
+    Channel("tow_vel_x", "tow_vel_x", "m/s", 1.0, -10.0, 10.0, "MRU tow-point surge velocity"),
+    Channel("tow_vel_y", "tow_vel_y", "m/s", 1.0, -10.0, 10.0, "MRU tow-point sway velocity"),
+    Channel("tow_acc_x", "tow_acc_x", "m/s^2", 1.0, -30.0, 30.0, "MRU tow-point surge acceleration"),
+    Channel("tow_acc_y", "tow_acc_y", "m/s^2", 1.0, -30.0, 30.0, "MRU tow-point sway acceleration"),
+    Channel("cable_angle", "cable_angle", "rad", 1.0, -2.0, 2.0, "top-cable depression angle at the sheave"),
+    Channel("cable_azimuth", "cable_azimuth", "rad", 1.0, -4.0, 4.0, "top-cable azimuth from astern"),
+    Channel("tow_disp_along", "tow_disp_along", "m", 1.0, -20.0, 20.0, "MRU displacement along the top cable"),
+    Channel("tow_vel_along", "tow_vel_along", "m/s", 1.0, -10.0, 10.0, "MRU velocity along the top cable"),
+    Channel("tow_acc_along", "tow_acc_along", "m/s^2", 1.0, -30.0, 30.0, "MRU acceleration along the top cable"),
     Channel("top_tension", "top_tension_ratio", "-", 1.0, 0.0, 20.0, "top tension / static top tension"),
     Channel("comp_stroke", "comp_stroke", "-", 1.0, -1.5, 1.5, "compensator stroke / half stroke"),
     Channel("comp_stroke_vel", "comp_stroke_vel", "m/s", 1.0, -10.0, 10.0, "compensator stroke velocity"),
@@ -87,6 +114,10 @@ CHANNELS: dict[str, Channel] = {c.name: c for c in [
             "winch-line length deviation from its initial length, in units of 10 m"),
     Channel("fish_heave", "fish_heave", "m", 1.0, -20.0, 20.0, "fish heave (m, + up): depth deviation = -heave"),
     Channel("fish_pitch", "fish_pitch", "rad", 0.1, -15.0, 15.0, "fish pitch in units of 0.1 rad (+ nose down)"),
+    Channel("fish_depth", "fish_depth", "m", 10.0, 0.0, 50.0, "fish depth (pressure sensor) in units of 10 m"),
+    Channel("fish_heave_dev", "fish_heave_dev", "m", 1.0, -20.0, 20.0, "fish heave about its running mean"),
+    Channel("fish_pitch_dev", "fish_pitch_dev", "rad", 0.1, -15.0, 15.0,
+            "fish pitch about its running mean, in units of 0.1 rad"),
     Channel("fish_heave_rate", "fish_heave_rate", "m/s", HEAVE_RATE_LIMIT, -20.0, 20.0,
             "fish heave rate / Table 6.1 limit (1 m/s)"),
     Channel("fish_pitch_rate", "fish_pitch_rate", "rad/s", PITCH_RATE_LIMIT, -100.0, 100.0,
@@ -362,24 +393,31 @@ class RewardFn:
 
 
 class HeavePitchReward(RewardFn):
-    """Motion cost plus penalties, per control step::
+    """Motion cost plus penalties, per control step, consistent with the evaluation metrics::
 
-        cost = w_heave·h² + w_pitch·θ² + w_heave_rate·(ḣ/1 m/s)² + w_pitch_rate·(q/6.28 °/s)²
+        cost = w_heave·h'² + w_pitch·θ'² + w_heave_rate·(ḣ/1 m/s)² + w_pitch_rate·(q/6.28 °/s)²
+             + w_rate_over·(max(0, |ḣ|/1 m/s − 1)² + max(0, |q|/6.28 °/s − 1)²)
              + w_end_stop·(end-stop hits this step) + w_slack·[min tension ≤ slack_tension]
              + w_over_tension·max(0, (T/T_break − f)/(1 − f)) + w_effort·mean(effort²) + w_action_rate·mean(Δa²)
 
-    h = fish heave (m), θ = fish pitch (rad); rates normalised by the thesis Table 6.1 sonar limits.
-    ``effort`` is the actuator's own effort measure (winch: speed / max speed; compensator: 0 — a
-    semi-active gain change costs no power), ``Δa`` the action change. On termination (cable parted,
-    fish below the floor) a cost ``w_terminal × (steps left + 1)`` is added so that ending an episode
-    early never pays.
+    h' = fish heave about its running mean and θ' = fish pitch about its running mean (the environment's
+    ``mean_time_constant``, default 30 s; with ``None`` about the steady-tow depth and trim): the metrics
+    score σ about the episode mean, so a constant offset (the fish rises by 0.9–1.8 m in waves) is not a
+    cost. Rates are normalised by the thesis Table 6.1 sonar limits; ``rate_over`` charges only what
+    exceeds them (the metrics' "fraction of time over the limit"). ``effort`` is the actuator's own effort
+    measure (winch: speed / max speed; compensator: 0 — a semi-active gain change costs no power), ``Δa``
+    the action change. On termination (cable parted, fish below the floor) a cost
+    ``w_terminal × (steps left + 1)`` is added so that ending an episode early never pays.
     """
 
-    #: Defaults balanced on the default scene (two_part_coastal_ss4, passive k = 20 kN/m, b = 5 kN s/m) in
-    #: the coastal SS4 evaluation seas: heave, pitch, heave-rate and pitch-rate terms each ≈ 0.3–0.5 per
-    #: step (fish heave² ≈ 1.8 m², pitch² ≈ 0.022 rad², (ḣ/1 m/s)² ≈ 0.08, (q/6.28 °/s)² ≈ 13).
-    DEFAULTS = dict(heave=0.25, pitch=20.0, heave_rate=5.0, pitch_rate=0.03, end_stop=1.0, slack=0.5,
-                    over_tension=10.0, effort=0.01, action_rate=0.01, terminal=2.0)
+    #: Defaults (docs/environments.md "Reward"): heave dominates — 1 per step at 0.32 m RMS heave deviation,
+    #: the fixed winch's level in coastal code 4; pitch 10 per rad² (0.1 at 5.7° RMS); the quadratic rate
+    #: terms are small shaping terms, the Table 6.1 exceedance is charged by ``rate_over``. ``slack`` = 0.1 per
+    #: control step with a slack segment: a controller that leaves the secondary slack 40 % of the time (the
+    #: fixed winch) pays 0.04 per step, as much as 6 cm of RMS heave — enough to prefer taut cables
+    #: (slack precedes the snap loads, Hover et al. 1994 §IV), too little to trade heave for tension.
+    DEFAULTS = dict(heave=10.0, pitch=10.0, heave_rate=0.1, pitch_rate=0.003, rate_over=0.1, end_stop=1.0,
+                    slack=0.1, over_tension=10.0, effort=0.001, action_rate=0.01, terminal=2.0)
 
     def __init__(self, weights: Mapping[str, float] | None = None, slack_tension: float = 1.0,
                  over_tension_fraction: float = 0.5):
@@ -387,7 +425,7 @@ class HeavePitchReward(RewardFn):
         for k, v in (weights or {}).items():
             if k not in w:
                 raise ValueError(f"unknown reward weight {k!r}; known: {sorted(w)}")
-            if not (math.isfinite(float(v)) and float(v) >= 0):
+            if not (isinstance(v, (int, float)) and math.isfinite(float(v)) and float(v) >= 0):
                 raise ValueError(f"reward weight {k!r} must be finite and >= 0 (got {v!r})")
             w[k] = float(v)
         if not 0.0 <= over_tension_fraction < 1.0:
@@ -406,10 +444,11 @@ class HeavePitchReward(RewardFn):
         eff = m.get("effort", 0.0)
         eff2 = float(eff) ** 2 if isinstance(eff, (int, float)) else float(np.mean(np.square(eff)))
         c = {
-            "heave": w["heave"] * m["fish_heave"] ** 2,
-            "pitch": w["pitch"] * m["fish_pitch"] ** 2,
+            "heave": w["heave"] * m.get("fish_heave_dev", m["fish_heave"]) ** 2,
+            "pitch": w["pitch"] * m.get("fish_pitch_dev", m["fish_pitch"]) ** 2,
             "heave_rate": w["heave_rate"] * hr * hr,
             "pitch_rate": w["pitch_rate"] * pr * pr,
+            "rate_over": w["rate_over"] * (max(0.0, abs(hr) - 1.0) ** 2 + max(0.0, abs(pr) - 1.0) ** 2),
             "end_stop": w["end_stop"] * float(m.get("end_stop_hits", 0)),
             "slack": w["slack"] * float(m["min_tension"] <= self.slack_tension),
             "over_tension": w["over_tension"] * max(0.0, (m["tension_ratio"] - f) / (1.0 - f)),
@@ -426,12 +465,12 @@ class HeavePitchReward(RewardFn):
         return self.weights["terminal"] * (int(steps_left) + 1)
 
     #: names of the components, in the order of the columns of :meth:`batch`'s component array
-    COMPONENTS = ("heave", "pitch", "heave_rate", "pitch_rate", "end_stop", "slack", "over_tension", "effort",
-                  "action_rate")
+    COMPONENTS = ("heave", "pitch", "heave_rate", "pitch_rate", "rate_over", "end_stop", "slack", "over_tension",
+                  "effort", "action_rate")
 
     def batch(self, M: np.ndarray, A: np.ndarray, A_prev: np.ndarray, rows: np.ndarray):
         """Compiled batched form of ``__call__`` for measurement rows ``M[rows]`` (columns
-        :data:`~towenv.core.batch.MEAS_COLUMNS`): ``(rewards (n,), components (n, 9))`` with the columns in
+        :data:`~towenv.core.batch.MEAS_COLUMNS`): ``(rewards (n,), components (n, 10))`` with the columns in
         the order of :attr:`COMPONENTS`."""
         wv = self.__dict__.get("_wv")
         if wv is None:                # the weights are constructor parameters: fixed after __init__
@@ -444,7 +483,7 @@ class HeavePitchReward(RewardFn):
 
 
 _MC = {n: i for i, n in enumerate(MEAS_COLUMNS)}
-_C_HEAVE, _C_PITCH = _MC["fish_heave"], _MC["fish_pitch"]
+_C_HEAVE, _C_PITCH = _MC["fish_heave_dev"], _MC["fish_pitch_dev"]
 _C_HR, _C_PR = _MC["fish_heave_rate"], _MC["fish_pitch_rate"]
 _C_HITS, _C_MINT, _C_RATIO, _C_EFF = _MC["end_stop_hits"], _MC["min_tension"], _MC["tension_ratio"], _MC["effort"]
 
@@ -452,6 +491,7 @@ _C_HITS, _C_MINT, _C_RATIO, _C_EFF = _MC["end_stop_hits"], _MC["min_tension"], _
 @njit(cache=True)
 def _heave_pitch_rows(M, A, AP, rows, w, slack, f, hrl, prl, C, R):
     na = A.shape[1]
+    nc = C.shape[1]
     for k in range(rows.shape[0]):
         b = rows[k]
         hr = M[b, _C_HR] / hrl
@@ -464,21 +504,24 @@ def _heave_pitch_rows(M, A, AP, rows, w, slack, f, hrl, prl, C, R):
         eff = M[b, _C_EFF]
         h = M[b, _C_HEAVE]
         th = M[b, _C_PITCH]
+        ho = max(0.0, abs(hr) - 1.0)
+        po = max(0.0, abs(pr) - 1.0)
         C[k, 0] = w[0] * (h * h)
         C[k, 1] = w[1] * (th * th)
         C[k, 2] = w[2] * hr * hr
         C[k, 3] = w[3] * pr * pr
-        C[k, 4] = w[4] * M[b, _C_HITS]
-        C[k, 5] = w[5] * (1.0 if M[b, _C_MINT] <= slack else 0.0)
-        C[k, 6] = w[6] * max(0.0, (M[b, _C_RATIO] - f) / (1.0 - f))
-        C[k, 7] = w[7] * (eff * eff)
-        C[k, 8] = w[8] * da2
+        C[k, 4] = w[4] * (ho * ho + po * po)
+        C[k, 5] = w[5] * M[b, _C_HITS]
+        C[k, 6] = w[6] * (1.0 if M[b, _C_MINT] <= slack else 0.0)
+        C[k, 7] = w[7] * max(0.0, (M[b, _C_RATIO] - f) / (1.0 - f))
+        C[k, 8] = w[8] * (eff * eff)
+        C[k, 9] = w[9] * da2
         tot = 0.0
-        for j in range(9):
+        for j in range(nc):
             tot += C[k, j]
         if not math.isfinite(tot):          # never hand NaN to a learner
             tot = 0.0
-            for j in range(9):
+            for j in range(nc):
                 if not math.isfinite(C[k, j]):
                     C[k, j] = 1e6
                 tot += C[k, j]
@@ -489,6 +532,6 @@ class HeaveOnlyReward(HeavePitchReward):
     """Heave (and heave-rate) cost only, with the same safety penalties."""
 
     def __init__(self, weights=None, **kw):
-        base = dict(pitch=0.0, pitch_rate=0.0)
+        base = dict(pitch=0.0, pitch_rate=0.0, rate_over=0.0)
         base.update(weights or {})
         super().__init__(base, **kw)
