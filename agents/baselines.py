@@ -42,7 +42,7 @@ import numpy as np
 
 from .common import ObsReader, env_kind, nearest_key, sea_key
 
-__all__ = ["Baseline", "LockedCompensator", "FixedPassive", "TabulatedPassive", "FixedWinch", "PDFeedForwardWinch",
+__all__ = ["STRONGEST", "CLAIRVOYANT", "Baseline", "LockedCompensator", "FixedPassive", "TabulatedPassive", "FixedWinch", "PDFeedForwardWinch",
            "ConstantTensionWinch", "BASELINES", "make_baseline", "baseline_names", "load_tuned", "TUNED_PATH",
            "DEFAULT_PD_GAINS", "DEFAULT_CT_GAIN"]
 
@@ -204,7 +204,7 @@ class PDFeedForwardWinch(Baseline):
         v = g_ff·(w_tow + g_acc·a_tow) + kp·h + kd·ḣ − kl·ΔL        (m/s, payout > 0),  a = v / v_max
 
     w_tow, a_tow = tow-point vertical velocity and acceleration (feed-forward: pay out as the stern
-    rises), h, ḣ = fish heave (+ up) and heave rate (PD: pay out when the fish is above its steady-tow
+    rises), h, ḣ = fish heave (+ up; about its running mean when ``fish_heave_dev`` is observed) and heave rate (PD: pay out when the fish is above its steady-tow
     depth), ΔL = winch-line length change (keeps the winch inside its travel). Gains per sea state from
     ``baselines.yml`` (``pd_ff``), or one set for all (``gains=``)."""
     name = "pd_ff"
@@ -213,9 +213,12 @@ class PDFeedForwardWinch(Baseline):
 
     def __init__(self, env, gains: dict | None = None, table: dict[str, dict] | None = None, name: str | None = None):
         super().__init__(env)
-        for ch in ("tow_vel_z", "fish_heave", "fish_heave_rate"):
+        for ch in ("tow_vel_z", "fish_heave_rate"):
             if not self.reader.has(ch):
                 raise ValueError(f"pd_ff needs the observation channel {ch!r}")
+        self._h = "fish_heave_dev" if self.reader.has("fish_heave_dev") else "fish_heave"
+        if not self.reader.has(self._h):
+            raise ValueError("pd_ff needs the observation channel 'fish_heave_dev' (or 'fish_heave')")
         self.table = table or None
         if self.table:
             self.acts_on = "env"          # reads env.unwrapped.sea to pick the gains
@@ -232,7 +235,7 @@ class PDFeedForwardWinch(Baseline):
     def act(self, obs):
         r, g = self.reader, self.g
         v = (g["g_ff"] * (r(obs, "tow_vel_z") + g["g_acc"] * r(obs, "tow_acc_z", 0.0))
-             + g["kp"] * r(obs, "fish_heave") + g["kd"] * r(obs, "fish_heave_rate")
+             + g["kp"] * r(obs, self._h) + g["kd"] * r(obs, "fish_heave_rate")
              - g["kl"] * r(obs, "winch_length_dev", 0.0))
         return np.array([min(max(v / self.vmax, -1.0), 1.0)])
 
@@ -289,6 +292,26 @@ def _hover(env, tuned):
     return TabulatedPassive(env, tuned.get("hover", {}), "hover", "Hover et al. (1994) tuning rules per sea state")
 
 
+def _along_cable(env, tuned):
+    from .classical import AlongCableWinch
+    return AlongCableWinch(env, table=tuned.get("along_cable") or None)
+
+
+def _skyhook(env, tuned):
+    from .classical import SkyhookCompensator
+    return SkyhookCompensator(env, table=tuned.get("skyhook") or None)
+
+
+def _clairvoyant(env, tuned):
+    from .clairvoyant import ClairvoyantWinch
+    return ClairvoyantWinch(env)
+
+
+def _clairvoyant_active(env, tuned):
+    from .clairvoyant import ClairvoyantActiveCompensator
+    return ClairvoyantActiveCompensator(env)
+
+
 BASELINES: dict[str, tuple[str, Any]] = {
     "locked": ("compensator", lambda env, tuned: LockedCompensator(env)),
     "default_passive": ("compensator", lambda env, tuned: FixedPassive(env, name="default_passive")),
@@ -297,7 +320,16 @@ BASELINES: dict[str, tuple[str, Any]] = {
     "fixed_winch": ("winch", lambda env, tuned: FixedWinch(env)),
     "pd_ff": ("winch", lambda env, tuned: PDFeedForwardWinch(env, table=tuned.get("pd_ff") or None)),
     "constant_tension": ("winch", lambda env, tuned: ConstantTensionWinch(env, table=tuned.get("constant_tension") or None)),
+    "along_cable": ("winch", _along_cable),
+    "skyhook": ("compensator", _skyhook),
+    "clairvoyant": ("winch", _clairvoyant),
+    "clairvoyant_active": ("compensator", _clairvoyant_active),
 }
+
+#: the strongest causal classical baseline of each environment kind (the goals compare against it) and the
+#: clairvoyant reference / bound (docs/agents.md)
+STRONGEST = {"compensator": "skyhook", "winch": "along_cable"}
+CLAIRVOYANT = {"compensator": "clairvoyant_active", "winch": "clairvoyant"}
 
 #: the no-compensation reference of each environment kind (denominator of the compensation ratios)
 REFERENCE = {"compensator": "locked", "winch": "fixed_winch"}

@@ -13,7 +13,11 @@ headings of one (Hs, Tp)):
 * ``hover``: :func:`agents.hover.hover_design` (linear model, design seed = tuning seed + 400);
 * ``pd_ff``: coordinate search over (g_ff, g_acc, kp, kd, kl); objective = mean σ(fish heave),
   constraint = the winch never at its travel limit, no termination;
-* ``constant_tension``: grid over the gain; same objective and constraint.
+* ``constant_tension``: grid over the gain; same objective and constraint;
+* ``along_cable``: coordinate search over (g_ff, τ, k_l, k_p, k_d) of :class:`agents.classical.AlongCableWinch`;
+  objective = mean σ(fish heave), constraint = never at the travel limit, no termination;
+* ``skyhook``: coordinate search over (c_sky, margin, k_stop) of :class:`agents.classical.SkyhookCompensator`;
+  objective = mean significant fish heave, constraint = no end-stop hit, no termination.
 """
 from __future__ import annotations
 
@@ -168,43 +172,107 @@ _PD_STEPS = {"g_ff": ("add", 0.15), "g_acc": ("add", 0.1), "kp": ("mul", 1.6), "
 _PD_BOUNDS = {"g_ff": (0.0, 1.5), "g_acc": (-0.5, 1.0), "kp": (0.02, 3.0), "kd": (-1.0, 3.0), "kl": (0.002, 0.5)}
 
 
-def tune_pd(env, groups, start=None, sweeps: int = 2):
+def coordinate_search(score, start: dict, steps: dict, bounds: dict, sweeps: int = 2):
+    """Coordinate search: for each parameter in turn, step it up and down (``("add", d)`` or ``("mul", f)``)
+    while ``score(params)[0]`` improves; halve the steps (square-root the factors) after each sweep.
+    ``score`` returns (objective, ...); returns the best score tuple."""
+    best = score(dict(start))
+    steps = dict(steps)
+    for _ in range(sweeps):
+        for name in steps:
+            how, st = steps[name]
+            for direction in (+1, -1):
+                while True:
+                    g = dict(best[-1])
+                    g[name] = g[name] + direction * st if how == "add" else g[name] * st ** direction
+                    lo, hi = bounds[name]
+                    g[name] = min(max(g[name], lo), hi)
+                    s = score(g)
+                    if s[0] < best[0] - 1e-6:
+                        best = s
+                    else:
+                        break
+        steps = {n: (h, (s / 2.0 if h == "add" else math.sqrt(s))) for n, (h, s) in steps.items()}
+    return best
+
+
+def _tune_winch_law(env, groups, make, defaults, steps, bounds, label, start=None, sweeps=2):
+    """Per sea state: coordinate search of a winch law's gains; objective = mean σ(fish heave) over the tuning
+    episodes, constraint = never at the travel limit and no termination."""
     table = {}
     for key, seas in groups.items():
         t0 = time.time()
         cache = {}
 
         def score(g):
-            ck = tuple(round(g[n], 4) for n in DEFAULT_PD_GAINS)
+            ck = tuple(round(g[n], 4) for n in defaults)
             if ck not in cache:
-                r = evaluate_config(env, PDFeedForwardWinch(env, gains=g), seas)
+                r = evaluate_config(env, make(env, g), seas)
                 feasible = r["max_winch_limit"] == 0 and not r["any_terminated"]
                 cache[ck] = (r["rms_heave"] if feasible else math.inf, r, dict(g))
             return cache[ck]
 
-        best = score(dict(DEFAULT_PD_GAINS | (start or {})))
-        steps = dict(_PD_STEPS)
-        for sweep in range(sweeps):
-            for name in DEFAULT_PD_GAINS:
-                how, st = steps[name]
-                for direction in (+1, -1):
-                    while True:
-                        g = dict(best[2])
-                        g[name] = g[name] + direction * st if how == "add" else g[name] * st ** direction
-                        lo, hi = _PD_BOUNDS[name]
-                        g[name] = min(max(g[name], lo), hi)
-                        s = score(g)
-                        if s[0] < best[0] - 1e-6:
-                            best = s
-                        else:
-                            break
-            steps = {n: (h, (s / 2.0 if h == "add" else math.sqrt(s))) for n, (h, s) in steps.items()}
-        rms, r, g = best
+        rms, r, g = coordinate_search(score, dict(defaults | (start or {})), steps, bounds, sweeps)
         entry = {n: round(float(v), 4) for n, v in g.items()}
         entry.update({"label": sea_label(seas[0][0]), "tuning_rms_heave": round(r["rms_heave"], 4),
-                      "tuning_sig_heave": round(r["sig_heave"], 4), "evaluations": len(cache)})
+                      "tuning_sig_heave": round(r["sig_heave"], 4),
+                      "tuning_sig_pitch_deg": round(r["sig_pitch_deg"], 4), "evaluations": len(cache)})
         table[key] = entry
-        _log(f"[tuning] pd_ff {key}: {entry} ({time.time() - t0:.0f} s)")
+        _log(f"[tuning] {label} {key}: {entry} ({time.time() - t0:.0f} s)")
+    return table
+
+
+def tune_pd(env, groups, start=None, sweeps: int = 2):
+    return _tune_winch_law(env, groups, lambda e, g: PDFeedForwardWinch(e, gains=g), DEFAULT_PD_GAINS, _PD_STEPS,
+                           _PD_BOUNDS, "pd_ff", start, sweeps)
+
+
+_ALONG_STEPS = {"g_ff": ("add", 0.15), "tau": ("add", 0.1), "kl": ("mul", 2.0), "kp": ("mul", 1.6), "kd": ("add", 0.2)}
+_ALONG_BOUNDS = {"g_ff": (0.0, 1.5), "tau": (0.0, 1.0), "kl": (0.002, 2.0), "kp": (0.01, 5.0), "kd": (-1.0, 3.0)}
+
+
+def tune_along(env, groups, start=None, sweeps: int = 2):
+    from .classical import DEFAULT_ALONG_GAINS, AlongCableWinch
+    return _tune_winch_law(env, groups, lambda e, g: AlongCableWinch(e, gains=g), DEFAULT_ALONG_GAINS, _ALONG_STEPS,
+                           _ALONG_BOUNDS, "along_cable", start, sweeps)
+
+
+_SKY_STEPS = {"c_sky": ("add", 1500.0), "b0": ("mul", 1.6), "k0": ("mul", 1.6), "margin": ("add", 0.15),
+              "k_stop": ("mul", 2.0)}
+_SKY_BOUNDS = {"c_sky": (0.0, 2e5), "b0": (50.0, 5e4), "k0": (1e3, 2e5), "margin": (0.05, 0.9), "k_stop": (1e3, 2e5)}
+
+
+def tune_skyhook(env, groups, start=None, sweeps: int = 2, passive: dict | None = None):
+    """Per sea state: coordinate search of the skyhook gains; objective = mean significant fish heave,
+    constraint = no end-stop hit and no termination in any tuning episode (as ``best_passive``). The search
+    starts from the best passive setting of the sea state (``passive``: the ``best_passive`` table), i.e. the
+    skyhook law with c_sky = 0 and no stiffening, so the tuned law is never worse on the tuning seeds."""
+    from .classical import DEFAULT_SKYHOOK_GAINS, SkyhookCompensator
+    table = {}
+    for key, seas in groups.items():
+        st = dict(start or {})
+        bp = (passive or {}).get(key)
+        if bp and bp.get("mode", "passive") == "passive" and not start:
+            st = {"c_sky": 0.0, "b0": float(bp["damping"]), "k0": float(bp["stiffness"]), "margin": 0.05,
+                  "k_stop": float(bp["stiffness"])}
+        t0 = time.time()
+        cache = {}
+
+        def score(g):
+            ck = tuple(round(g[n], 4) for n in DEFAULT_SKYHOOK_GAINS)
+            if ck not in cache:
+                r = evaluate_config(env, SkyhookCompensator(env, gains=g), seas)
+                feasible = r["total_hits"] == 0 and not r["any_terminated"]
+                cache[ck] = (r["sig_heave"] if feasible else math.inf, r, dict(g))
+            return cache[ck]
+
+        sig, r, g = coordinate_search(score, dict(DEFAULT_SKYHOOK_GAINS | st), _SKY_STEPS, _SKY_BOUNDS, sweeps)
+        entry = {n: round(float(v), 4) for n, v in g.items()}
+        entry.update({"label": sea_label(seas[0][0]), "tuning_sig_heave": round(r["sig_heave"], 4),
+                      "tuning_sig_pitch_deg": round(r["sig_pitch_deg"], 4), "feasible": bool(math.isfinite(sig)),
+                      "tuning_stroke_max_frac": round(r.get("stroke_max_frac", 0.0), 3), "evaluations": len(cache)})
+        table[key] = entry
+        _log(f"[tuning] skyhook {key}: {entry} ({time.time() - t0:.0f} s)")
     return table
 
 
@@ -230,8 +298,8 @@ def tune_ct(env, groups, gains=None):
 # ----------------------------------------------------------------------------------- CLI
 def main(argv=None):
     p = argparse.ArgumentParser(description="Tune the per-sea-state baselines -> agents/hyperparams/baselines.yml")
-    p.add_argument("--only", nargs="*", default=["passive", "hover", "pd", "ct"],
-                   choices=["passive", "hover", "pd", "ct"])
+    p.add_argument("--only", nargs="*", default=["passive", "hover", "skyhook", "pd", "ct", "along"],
+                   choices=["passive", "hover", "skyhook", "pd", "ct", "along"])
     p.add_argument("--out", default=str(TUNED_PATH))
     p.add_argument("--episode-seconds", type=float, default=300.0)
     p.add_argument("--codes", nargs="*", type=int, default=None, help="only these WMO codes' sea states")
@@ -241,13 +309,22 @@ def main(argv=None):
     tuned = load_tuned(out) if out.exists() else {}
     kw = {"episode_seconds": args.episode_seconds}
     started = time.time()
-    if {"passive", "hover"} & set(args.only):
+    if {"passive", "hover", "skyhook"} & set(args.only):
         env = _make(COMPENSATOR_ID, **kw)
         groups = _filter(group_by_sea(tuning_seas(env)), args.codes, env)
         if "hover" in args.only:
             tuned["hover"] = tuned.get("hover", {}) | tune_hover(env, groups)
         if "passive" in args.only:
             tuned["best_passive"] = tuned.get("best_passive", {}) | tune_passive(env, groups)
+            _write(out, tuned)
+        if "skyhook" in args.only:
+            tuned["skyhook"] = tuned.get("skyhook", {}) | tune_skyhook(env, groups,
+                                                                       passive=tuned.get("best_passive"))
+        _write(out, tuned)
+    if "along" in args.only:
+        env = _make(WINCH_ID, **kw)
+        groups = _filter(group_by_sea(tuning_seas(env)), args.codes, env)
+        tuned["along_cable"] = tuned.get("along_cable", {}) | tune_along(env, groups)
         _write(out, tuned)
     if {"pd", "ct"} & set(args.only):
         env = _make(WINCH_ID, **kw)
@@ -280,7 +357,7 @@ def _write(path: Path, tuned: dict):
     path.parent.mkdir(parents=True, exist_ok=True)
     head = ("# Tuned baselines per sea state (key hs<Hs>_tp<Tp>), written by `python -m agents.tuning`.\n"
             "# Tuning seeds = evaluation seeds + 500 (never the evaluation seeds). See agents/tuning.py.\n")
-    order = ["_meta", "best_passive", "hover", "pd_ff", "constant_tension"]
+    order = ["_meta", "best_passive", "hover", "skyhook", "pd_ff", "constant_tension", "along_cable"]
     doc = {k: tuned[k] for k in order if k in tuned} | {k: v for k, v in tuned.items() if k not in order}
     path.write_text(head + yaml.safe_dump(doc, sort_keys=False, width=120))
 

@@ -71,7 +71,11 @@ def parse_args(argv=None):
     p.add_argument("--export", default=None, help="copy the exported policy zip here")
     p.add_argument("--export-which", choices=["best", "last"], default="best",
                    help="export the validation-best model (default, if any) or the last one")
-    p.add_argument("--vec-env", choices=["dummy", "subproc"], default="dummy")
+    p.add_argument("--vec-env", choices=["batched", "dummy", "subproc"], default="batched",
+                   help="batched (default): all copies in one compiled call (towenv.envs.sb3.TowSB3VecEnv); "
+                        "dummy/subproc: SB3's Python loop / processes over single environments")
+    p.add_argument("--parallel", action="store_true",
+                   help="batched env: step the copies with numba.prange on all cores (NUMBA_NUM_THREADS)")
     p.add_argument("--threads", type=int, default=1, help="torch threads (1 is fastest for small MLPs on CPU)")
     p.add_argument("--device", default="cpu")
     p.add_argument("--verbose", type=int, default=0)
@@ -91,6 +95,23 @@ def validation_seas(env_id: str, env_kwargs: dict, n: int):
     per = max(1, len(ev) // 3)
     order = [i + j * per for i in range(per) for j in range(len(ev) // per)]
     return [(ev[i][0], ev[i][1] + 700) for i in order[:max(1, n)]]
+
+
+def batched_venv(env_id: str, n_envs: int, env_kwargs: dict, wrappers, seed: int, parallel: bool = False):
+    """The batched SB3 VecEnv (one compiled call steps all copies; copy i seeded seed + i) with a VecMonitor and
+    the YAML's wrappers: ``agents.wrappers.ResidualAction`` becomes its batched twin
+    :class:`agents.wrappers.ResidualVecAction` (same keywords); other wrappers need ``--vec-env dummy``."""
+    from stable_baselines3.common.vec_env import VecMonitor
+    from agents.wrappers import ResidualVecAction
+    from agents.zoo import _wrapper_list
+    from towenv.envs.sb3 import TowSB3VecEnv
+    venv = VecMonitor(TowSB3VecEnv(env_id, n_envs, seed=seed, parallel=parallel, **env_kwargs))
+    for name, kw in _wrapper_list(wrappers):
+        if name.endswith("ResidualAction"):
+            venv = ResidualVecAction(venv, **kw)
+        else:
+            raise SystemExit(f"train.py: wrapper {name} has no batched form; use --vec-env dummy")
+    return venv
 
 
 def main(argv=None):
@@ -125,12 +146,15 @@ def main(argv=None):
     run.mkdir(parents=True, exist_ok=True)
     ckpt_dir.mkdir(exist_ok=True)
 
-    fns = [make_env_fn(args.env, env_kwargs, wrappers, seed=args.seed + 1000 * i) for i in range(n_envs)]
-    if args.vec_env == "subproc" and n_envs > 1:
-        venv = SubprocVecEnv(fns, start_method="forkserver")
+    if args.vec_env == "batched":
+        venv = batched_venv(args.env, n_envs, env_kwargs, wrappers, args.seed, args.parallel)
     else:
-        venv = DummyVecEnv(fns)
-    venv.seed(args.seed)
+        fns = [make_env_fn(args.env, env_kwargs, wrappers, seed=args.seed + 1000 * i) for i in range(n_envs)]
+        if args.vec_env == "subproc" and n_envs > 1:
+            venv = SubprocVecEnv(fns, start_method="forkserver")
+        else:
+            venv = DummyVecEnv(fns)
+        venv.seed(args.seed)
     norm = hp["normalize"]
     if norm is not None:
         venv = VecNormalize(venv, gamma=hp["algo_kwargs"].get("gamma", 0.99), **norm)
@@ -170,7 +194,10 @@ def main(argv=None):
         if args.eval_seconds:
             ekw["episode_seconds"] = args.eval_seconds
         ekw["sea_generator"] = FixedSeas(validation_seas(args.env, ekw, args.eval_episodes))
-        eval_env = DummyVecEnv([make_env_fn(args.env, ekw, wrappers, seed=args.seed + 12345)])
+        if args.vec_env == "batched":            # same wrapper chain as the training env (VecNormalize sync)
+            eval_env = batched_venv(args.env, 1, ekw, wrappers, args.seed + 12345)
+        else:
+            eval_env = DummyVecEnv([make_env_fn(args.env, ekw, wrappers, seed=args.seed + 12345)])
         if norm is not None:
             eval_env = VecNormalize(eval_env, training=False, norm_obs=norm.get("norm_obs", True), norm_reward=False)
         callbacks.append(EvalCallback(eval_env, best_model_save_path=str(run / "best"), log_path=str(run / "eval"),
