@@ -56,7 +56,7 @@ def _episode(env, sea, seed, commands, apply):
     slack = np.empty(n, bool)
     ok = True
     for k in range(n):
-        a = apply(u, k, commands)
+        a = np.asarray(apply(u, k, commands), np.float32)      # as a policy's predict() hands it over
         _, _, term, trunc, info = u.step(a)
         m = u._last_m
         y[k] = info["fish_heave"]
