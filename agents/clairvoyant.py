@@ -122,6 +122,8 @@ def identify_fir(env, kind: str, fir_seconds: float = 60.0, step: float = 0.01, 
 # ============================================================================ optimisation
 #: the plan's knots are every DECIMATE control steps (0.2 s); the input is linear between knots
 DECIMATE = 2
+#: OSQP tolerance (absolute and relative) of the planning QPs
+QP_EPS = 1e-6
 
 
 def _coarse_fir(h, D):
@@ -181,8 +183,8 @@ def _qp(hc, c, q_ref, window, limits, rho, target=None):
             hi.append(np.full(m, lim))
     A = sp.vstack(blocks, format="csc")
     prob = osqp.OSQP()
-    prob.setup(sp.csc_matrix(P), q, A, np.concatenate(lo), np.concatenate(hi), verbose=False, eps_abs=1e-6,
-               eps_rel=1e-6, max_iter=20000, polishing=True)
+    prob.setup(sp.csc_matrix(P), q, A, np.concatenate(lo), np.concatenate(hi), verbose=False, eps_abs=QP_EPS,
+               eps_rel=QP_EPS, max_iter=20000, polishing=True)
     r = prob.solve(raise_error=False)
     x = r.x
     if x is None or not np.all(np.isfinite(x[:m])):

@@ -97,6 +97,25 @@ def validation_seas(env_id: str, env_kwargs: dict, n: int):
     return [(ev[i][0], ev[i][1] + 700) for i in order[:max(1, n)]]
 
 
+def resolve_tuned_tables(wrappers):
+    """Replace ``table: tuned`` in a residual wrapper by the tuned table itself (from
+    agents/hyperparams/baselines.yml at training time), so the policy zip's metadata carries the exact base
+    controller it was trained on, whatever later retuning does to the YAML."""
+    from agents.baselines import load_tuned
+    from agents.zoo import _wrapper_list
+    out = []
+    for name, kw in _wrapper_list(wrappers):
+        kw = dict(kw)
+        if kw.get("table") == "tuned":
+            tab = load_tuned().get(kw.get("base"))
+            if not tab:
+                raise SystemExit(f"train.py: no tuned {kw.get('base')!r} table in agents/hyperparams/baselines.yml "
+                                 f"(run python -m agents.tuning)")
+            kw["table"] = {k: {n: v for n, v in e.items() if not isinstance(v, str)} for k, e in tab.items()}
+        out.append({name: kw})
+    return out or None
+
+
 def batched_venv(env_id: str, n_envs: int, env_kwargs: dict, wrappers, seed: int, parallel: bool = False):
     """The batched SB3 VecEnv (one compiled call steps all copies; copy i seeded seed + i) with a VecMonitor and
     the YAML's wrappers: ``agents.wrappers.ResidualAction`` becomes its batched twin
@@ -133,7 +152,7 @@ def main(argv=None):
     n_timesteps = args.n_timesteps or hp["n_timesteps"]
     env_kwargs = dict(hp["env_kwargs"])
     env_kwargs.update(parse_env_kwargs(args.env_kwargs))
-    wrappers = hp["env_wrapper"]
+    wrappers = resolve_tuned_tables(hp["env_wrapper"])
     for k, v in parse_env_kwargs(args.hyperparams).items():
         if isinstance(v, str) and v.startswith("lin_"):
             from agents.zoo import linear_schedule
