@@ -301,3 +301,17 @@ def test_residual_vec_action_matches_single_env_residual():
             o, r, te, tr, _ = e.step(a[i])
             np.testing.assert_array_equal(obs_v[i], o)
             assert r_v[i] == r
+
+
+def test_compensator_classes_set_stroke_and_mass():
+    from towenv.core import kernels as K
+    from towenv.envs.compensator import COMPENSATOR_CLASSES, CompensatorGainsEnv
+    env = gym.make(COMP, compensator_class="deep_tow_4m")
+    u = env.unwrapped
+    env.reset(seed=0)
+    c = u.sim.scene.compensator
+    assert (c.stroke, c.mass) == (4.0, 530.0) and u._half_stroke == 2.0
+    assert u.sim.comp[K.C_SMAX] - u.sim.comp[K.C_SMIN] == pytest.approx(4.0)
+    assert gym.make(COMP).unwrapped.sim.scene.compensator.stroke == COMPENSATOR_CLASSES["sheave_2m"]["stroke"]
+    with pytest.raises(ValueError, match="compensator_class"):
+        CompensatorGainsEnv(compensator_class="huge")

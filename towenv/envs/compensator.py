@@ -22,13 +22,25 @@ from numba import njit
 from ..core import batch as BT
 from .base import TowEnv
 
-__all__ = ["CompensatorGainsEnv"]
+__all__ = ["CompensatorGainsEnv", "COMPENSATOR_CLASSES"]
+
+#: Named compensator classes (stroke = total travel, m; apparent mass, kg). ``sheave_2m`` is the default scene's
+#: small-craft sheave compensator (2 m travel, 50 kg, illustrative); ``deep_tow_4m`` is the travel and apparent
+#: mass Hover et al. (1994, §IV-B) give for the MBARI SWATH's bobbing-crane compensator ("the available
+#: compensator travel is 4.0 m", m_comp = 530 kg, Table II). ``None`` keeps the scene's values. The
+#: semi-active force k·s + b·ṡ is bounded by the gain bounds and the stroke (no separate force limit: the
+#: reports give the largest force used).
+COMPENSATOR_CLASSES = {
+    "sheave_2m": {"stroke": 2.0, "mass": 50.0},
+    "deep_tow_4m": {"stroke": 4.0, "mass": 530.0},
+}
 
 
 class CompensatorGainsEnv(TowEnv):
     """Semi-active heave compensation by online (k, b) tuning. See ``docs/environments.md``.
 
-    Extra keywords: ``stiffness_floor`` and ``damping_floor`` (N/m, N s/m) — positive floors used for
+    Extra keywords: ``compensator_class`` (:data:`COMPENSATOR_CLASSES`; default None = the scene's stroke and
+    mass), ``stiffness_floor`` and ``damping_floor`` (N/m, N s/m) — positive floors used for
     the log map when a scene bound is 0 (default 1e-3 × the upper bound). The scene's compensator is
     put in ``passive`` mode (the gains act only there)."""
 
@@ -39,7 +51,12 @@ class CompensatorGainsEnv(TowEnv):
     ACT_KIND = BT.ACT_COMP_GAINS
     ACTUATOR_KEYS = ("comp_stroke", "comp_stroke_vel", "end_stop_hits", "comp_stiffness", "comp_damping", "effort")
 
-    def __init__(self, *, stiffness_floor: float | None = None, damping_floor: float | None = None, **kwargs):
+    def __init__(self, *, compensator_class: str | None = None, stiffness_floor: float | None = None,
+                 damping_floor: float | None = None, **kwargs):
+        if compensator_class is not None and compensator_class not in COMPENSATOR_CLASSES:
+            raise ValueError(f"CompensatorGainsEnv: compensator_class must be one of {sorted(COMPENSATOR_CLASSES)} "
+                             f"or None (got {compensator_class!r})")
+        self.compensator_class = compensator_class
         self.stiffness_floor = stiffness_floor
         self.damping_floor = damping_floor
         super().__init__(**kwargs)
@@ -48,9 +65,12 @@ class CompensatorGainsEnv(TowEnv):
     def _prepare_scene(self, scene):
         if scene.compensator is None:
             raise ValueError(f"CompensatorGainsEnv: scene {scene.name!r} has no [compensator] section")
+        ov = {}
         if scene.compensator.mode != "passive":
-            scene = scene.with_overrides({"compensator.mode": "passive"})
-        return scene
+            ov["compensator.mode"] = "passive"
+        if self.compensator_class is not None:
+            ov.update({f"compensator.{k}": v for k, v in COMPENSATOR_CLASSES[self.compensator_class].items()})
+        return scene.with_overrides(ov) if ov else scene
 
     @staticmethod
     def _log_range(bounds, floor, what):
