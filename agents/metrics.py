@@ -162,6 +162,7 @@ def episode_metrics(rec: EpisodeRecord, discard: float = 60.0) -> dict[str, floa
         "top_tension_max_all": float(np.max(d["top_tension"])),
         "min_tension_all": float(np.min(d["min_tension"])),
         "slack_steps": float(np.sum(d["min_tension"] <= 1.0)),
+        "slack_frac": float(np.mean(d["min_tension"][w] <= 1.0)),
         "return": float(rec.ret),
         "steps": float(rec.steps),
         "terminated": float(rec.terminated),
@@ -186,6 +187,7 @@ def episode_metrics(rec: EpisodeRecord, discard: float = 60.0) -> dict[str, floa
             "winch_dev_max_frac": float(np.max(np.abs(dev))) / trav,
             "winch_rms_speed": float(np.sqrt(np.mean(d["winch_speed"][w] ** 2))),
             "winch_frac_at_limit": float(np.mean(np.abs(dev) >= trav - 1e-3)),
+            "winch_peak_power_kw": float(np.max(np.abs(d["winch_speed"] * d["top_tension"]))) / 1e3,
         })
     return out
 

@@ -290,6 +290,9 @@ def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str 
     else:
         L += ["No trained policy in this evaluation (baselines only).", ""]
 
+    # ---- headline table
+    L += headline_table(res)
+
     # ---- controllers
     L += ["## Controllers", ""]
     rows = []
@@ -386,6 +389,48 @@ def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str 
 
 def _fmt(t, pct=False, digits=3):
     return _ci(t, digits=digits, pct=pct)
+
+
+def headline_table(res: EvalResult) -> list[str]:
+    """Issue 14's table: per sea state and pooled, RMS fish heave, compensation ratio, σ(pitch) and slack
+    fraction of: no compensation, the strongest causal classical baseline, the clairvoyant reference / bound,
+    and the trained policies (each seed, and their mean when there are several)."""
+    from .baselines import CLAIRVOYANT, REFERENCE, STRONGEST
+    cols = [(REFERENCE[res.kind], "no compensation"), (STRONGEST[res.kind], "strongest causal classical"),
+            (CLAIRVOYANT[res.kind], "clairvoyant " + ("reference" if res.kind == "winch" else "active bound"))]
+    if res.kind == "compensator":
+        cols.insert(1, ("best_passive", "best fixed passive"))
+    cols = [(n, lab) for n, lab in cols if n in res.metrics]
+    trained = [c.name for c in res.controllers if c.kind == "trained"]
+    cols += [(n, "RL") for n in trained]
+    if not cols:
+        return []
+    gidx = {g: [i for i, e in enumerate(res.episodes) if e[0] == g] for g in res.groups}
+    gidx["all"] = list(range(len(res.episodes)))
+
+    def cell(names, ix):
+        per = []
+        for n in names:
+            ms = [res.metrics[n][i] for i in ix]
+            per.append((np.mean([m["rms_heave"] for m in ms]), np.mean([m["cr_heave"] for m in ms]),
+                        np.mean([m["rms_pitch_deg"] for m in ms]), np.mean([m.get("slack_frac", math.nan) for m in ms])))
+        a = np.array(per).mean(axis=0)
+        return f"{100 * a[0]:.1f} cm / {100 * a[1]:.0f} % / {a[2]:.1f}° / {100 * a[3]:.0f} %"
+
+    header = ["sea state"] + [f"{lab} `{n}`" for n, lab in cols]
+    if len(trained) > 1:
+        header.append(f"RL mean of {len(trained)} seeds")
+    rows = []
+    for g, ix in gidx.items():
+        lab = "pooled" if g == "all" else res.group_label(g)
+        row = [lab] + [cell([n], ix) for n, _ in cols]
+        if len(trained) > 1:
+            row.append(cell(trained, ix))
+        rows.append(row)
+    return (["## Headline table", "",
+             "Each cell: RMS fish heave (σ about the episode mean) / heave compensation ratio CR = 1 − σ/σ(no "
+             "compensation) / σ(pitch) / fraction of the scored window with a slack segment (≤ 1 N), means over "
+             "the episodes of the row.", ""] + _table(header, rows) + [""])
 
 
 def _across_seeds_md(groups: list) -> list[str]:
