@@ -72,8 +72,9 @@ class AlongCableWinch(Baseline):
         if self.table:
             self.g = dict(DEFAULT_ALONG_GAINS | self.table[nearest_key(self.table, self.u.sea[0])])
 
-    def velocity(self, obs) -> float:
-        r, g = self.reader, self.g
+    def velocity(self, obs, g: dict | None = None) -> float:
+        r = self.reader
+        g = self.g if g is None else g
         ff = g["g_ff"] * (r(obs, "tow_vel_along") + g["tau"] * r(obs, "tow_acc_along"))
         centre = -g["kl"] * (r(obs, "winch_length_dev") - g["g_ff"] * r(obs, "tow_disp_along"))
         fb = g["kp"] * r(obs, "fish_heave_dev") + g["kd"] * r(obs, "fish_heave_rate")

@@ -11,7 +11,21 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["ResidualAction", "ResidualVecAction", "make_base"]
+__all__ = ["ResidualAction", "ResidualVecAction", "GainScheduleAction", "GainScheduleVecAction", "make_base",
+           "GAIN_NAMES"]
+
+#: the along-cable gains a gain-scheduling policy modulates: multiplicatively (× exp(spread·a)) except k_d
+#: (added: spread·a·0.5 m/s per m/s, it changes sign in the tuned tables)
+GAIN_NAMES = ("g_ff", "tau", "kl", "kp", "kd")
+
+
+def scheduled_gains(g0: dict, a, spread: float) -> dict:
+    """The along-cable gains ``g0`` modulated by an action ``a`` ∈ [-1, 1]^5 (order :data:`GAIN_NAMES`)."""
+    a = np.clip(np.nan_to_num(np.asarray(a, float).reshape(-1), nan=0.0), -1.0, 1.0)
+    g = dict(g0)
+    for i, n in enumerate(GAIN_NAMES):
+        g[n] = g0[n] + 0.5 * spread * a[i] if n == "kd" else g0[n] * float(np.exp(spread * a[i]))
+    return g
 
 
 def make_base(env, base: str, gains: dict | None = None, stiffness: float | None = None,
@@ -107,3 +121,77 @@ class ResidualVecAction:
                 return obs, rew, dones, infos
 
         return _Residual(venv, **kw)
+
+
+class GainScheduleAction(gym.Wrapper):
+    """Gain-scheduling policy on the along-cable law (WinchPayout): the agent's action a ∈ [-1, 1]^5 modulates the
+    law's gains every control step — g_ff, τ, k_l, k_p multiplied by exp(spread·a_i), k_d shifted by
+    0.5·spread·a — around the tuned per-sea-state gains (``table``) or fixed ``gains``; the law then computes the
+    payout speed from the observation. a = 0 is the baseline itself; every action is a stable, centred law, so
+    exploration cannot random-walk the winch off its travel."""
+
+    def __init__(self, env, spread: float = 0.5, gains: dict | None = None, table: str | dict | None = None):
+        super().__init__(env)
+        self.base = make_base(env, "along_cable", gains=gains, table=table)
+        self.spread = float(spread)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (len(GAIN_NAMES),), np.float32)
+        self._obs = None
+        self._start = True
+
+    def reset(self, **kwargs):
+        obs, info = self.env.reset(**kwargs)
+        self._obs = obs
+        self._start = True
+        return obs, info
+
+    def env_action(self, action):
+        if self._start:
+            self.base.predict(self._obs, episode_start=np.array([True]))      # picks the sea state's gains
+            self._start = False
+        g = scheduled_gains(self.base.g, action, self.spread)
+        v = self.base.velocity(self._obs, g)
+        return np.array([min(max(v / self.base.vmax, -1.0), 1.0)], np.float32)
+
+    def step(self, action):
+        obs, r, term, trunc, info = self.env.step(self.env_action(action))
+        self._obs = obs
+        return obs, r, term, trunc, info
+
+
+class GainScheduleVecAction:
+    """:class:`GainScheduleAction` for a batched SB3 ``VecEnv`` (one base law per copy)."""
+
+    def __new__(cls, venv, **kw):
+        from stable_baselines3.common.vec_env import VecEnvWrapper
+
+        class _Sched(VecEnvWrapper):
+            def __init__(self, venv, spread=0.5, gains=None, table=None):
+                super().__init__(venv, action_space=gym.spaces.Box(-1.0, 1.0, (len(GAIN_NAMES),), np.float32))
+                self.bases = [make_base(e, "along_cable", gains=gains, table=table) for e in venv.envs]
+                self.spread = float(spread)
+                self._obs = None
+                self._start = np.ones(venv.num_envs, bool)
+
+            def reset(self):
+                self._obs = self.venv.reset()
+                self._start[:] = True
+                return self._obs
+
+            def step_async(self, actions):
+                a = np.asarray(actions, np.float32).reshape(self.num_envs, -1)
+                out = np.empty((self.num_envs, 1), np.float32)
+                for i, b in enumerate(self.bases):
+                    if self._start[i]:
+                        b.predict(self._obs[i], episode_start=np.array([True]))
+                    g = scheduled_gains(b.g, a[i], self.spread)
+                    out[i, 0] = min(max(b.velocity(self._obs[i], g) / b.vmax, -1.0), 1.0)
+                self._start[:] = False
+                self.venv.step_async(out)
+
+            def step_wait(self):
+                obs, rew, dones, infos = self.venv.step_wait()
+                self._obs = obs
+                self._start[:] = dones
+                return obs, rew, dones, infos
+
+        return _Sched(venv, **kw)

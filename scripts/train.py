@@ -107,7 +107,7 @@ def resolve_tuned_tables(wrappers):
     for name, kw in _wrapper_list(wrappers):
         kw = dict(kw)
         if kw.get("table") == "tuned":
-            tab = load_tuned().get(kw.get("base"))
+            tab = load_tuned().get(kw.get("base", "along_cable"))
             if not tab:
                 raise SystemExit(f"train.py: no tuned {kw.get('base')!r} table in agents/hyperparams/baselines.yml "
                                  f"(run python -m agents.tuning)")
@@ -121,13 +121,15 @@ def batched_venv(env_id: str, n_envs: int, env_kwargs: dict, wrappers, seed: int
     the YAML's wrappers: ``agents.wrappers.ResidualAction`` becomes its batched twin
     :class:`agents.wrappers.ResidualVecAction` (same keywords); other wrappers need ``--vec-env dummy``."""
     from stable_baselines3.common.vec_env import VecMonitor
-    from agents.wrappers import ResidualVecAction
+    from agents.wrappers import GainScheduleVecAction, ResidualVecAction
     from agents.zoo import _wrapper_list
     from towenv.envs.sb3 import TowSB3VecEnv
     venv = VecMonitor(TowSB3VecEnv(env_id, n_envs, seed=seed, parallel=parallel, **env_kwargs))
     for name, kw in _wrapper_list(wrappers):
         if name.endswith("ResidualAction"):
             venv = ResidualVecAction(venv, **kw)
+        elif name.endswith("GainScheduleAction"):
+            venv = GainScheduleVecAction(venv, **kw)
         else:
             raise SystemExit(f"train.py: wrapper {name} has no batched form; use --vec-env dummy")
     return venv

@@ -81,7 +81,7 @@ def test_sb3_checker(env_id):
 # ---------------------------------------------------------------------------------------- determinism
 @pytest.mark.parametrize("env_id", IDS)
 def test_same_seed_same_rollout(env_id):
-    kw = dict(sensor_noise={"fish_heave": 0.05, "tow_acc_z": 0.1}, obs_delay=1)   # noise must be seeded too
+    kw = dict(sensor_noise={"fish_heave_dev": 0.05, "tow_acc_z": 0.1}, obs_delay=1)   # noise must be seeded too
     a, b = gym.make(env_id, **kw), gym.make(env_id, **kw)
     acts = _actions(a, 150)
     ra, rb = _rollout(a, acts, seed=7), _rollout(b, acts, seed=7)
@@ -241,7 +241,7 @@ def test_wave_preview_channel():
 def test_random_policy_soak_stays_finite(cls):
     """Random actions over many sea states (up to code 7, Hs ≈ 6–9 m), with sensor noise: every
     observation/reward finite and inside the space, nothing raised (failures may only truncate)."""
-    env = cls(sea_codes=(3, 4, 5, 6, 7), sensor_noise={"fish_heave": 0.02}, episode_seconds=100.0)
+    env = cls(sea_codes=(3, 4, 5, 6, 7), sensor_noise={"fish_heave_dev": 0.02}, episode_seconds=100.0)
     env.action_space.seed(0)
     steps = 0
     for ep in range(12):

@@ -85,7 +85,7 @@ def test_batched_equals_single_envs_bit_for_bit(env_id):
 def test_batched_noise_delay_and_mixed_node_counts_bit_for_bit():
     # sensor noise (drawn per copy from its own np_random), a delay ring buffer per copy, and cable
     # lengths drawn per reset: the copies run different Simulators (configurations) in one typed List
-    kw = {"sensor_noise": {"fish_heave": 0.05, "top_tension": 0.02}, "obs_delay": 2,
+    kw = {"sensor_noise": {"fish_heave_dev": 0.05, "top_tension": 0.02}, "obs_delay": 2,
           "cable_lengths": (70.0, 85.0, 100.0)}
     venv, singles, _ = _compare("towenv/CompensatorGains-v0", _random_actions(12, 4, 2, seed=1), seed=11, kw=kw)
     lengths = {round(float(s.sim.system.l0.sum()), 6) for s in singles}
@@ -251,7 +251,7 @@ def test_tow_point_phase_recurrence_matches_exact_path():
 
 
 def test_pickled_env_continues_identically():
-    env = WinchPayoutEnv(sensor_noise={"fish_heave": 0.1})
+    env = WinchPayoutEnv(sensor_noise={"fish_heave_dev": 0.1})
     env.reset(seed=3)
     acts = _random_actions(40, 1, 1, seed=2)[:, 0]
     for a in acts[:20]:
@@ -269,7 +269,7 @@ def test_sb3_adapter_and_ppo_learns():
     from towenv.envs.sb3 import TowSB3VecEnv
     ve = TowSB3VecEnv("towenv/CompensatorGains-v0", 3, seed=0, episode_seconds=2.0)     # 20 steps
     o = ve.reset()
-    assert o.shape == (3, 11) and o.dtype == np.float32
+    assert o.shape == (3, CompensatorGainsEnv(episode_seconds=2.0).observation_space.shape[0]) and o.dtype == np.float32
     single = CompensatorGainsEnv(episode_seconds=2.0)
     so, _ = single.reset(seed=1)
     np.testing.assert_array_equal(o[1], so)                          # copy i seeded with seed + i
