@@ -315,3 +315,39 @@ def test_compensator_classes_set_stroke_and_mass():
     assert gym.make(COMP).unwrapped.sim.scene.compensator.stroke == COMPENSATOR_CLASSES["sheave_2m"]["stroke"]
     with pytest.raises(ValueError, match="compensator_class"):
         CompensatorGainsEnv(compensator_class="huge")
+
+
+def test_gain_schedule_wrapper_zero_action_is_the_baseline():
+    """GainScheduleAction with a = 0 drives the winch exactly as the along-cable law; its batched twin applies
+    the same law to each copy."""
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from agents.baselines import make_baseline
+    from agents.wrappers import GAIN_NAMES, GainScheduleAction, GainScheduleVecAction, scheduled_gains
+    from towenv.envs.sb3 import TowSB3VecEnv
+    g0 = {"g_ff": 0.8, "tau": 0.2, "kl": 0.02, "kp": 0.2, "kd": -0.1}
+    g = scheduled_gains(g0, np.ones(len(GAIN_NAMES)), 0.5)
+    assert g["g_ff"] == pytest.approx(0.8 * math.exp(0.5)) and g["kd"] == pytest.approx(-0.1 + 0.25)
+    assert scheduled_gains(g0, np.zeros(len(GAIN_NAMES)), 0.5) == g0
+    w = GainScheduleAction(gym.make(WINCH, episode_seconds=20.0), gains=g0)
+    ref = gym.make(WINCH, episode_seconds=20.0)
+    base = make_baseline("along_cable", ref, tuned={})
+    base.fixed = base.g = dict(base.g | g0)
+    o1, _ = w.reset(seed=3)
+    o2, _ = ref.reset(seed=3)
+    for k in range(50):
+        a2, _ = base.predict(o2, episode_start=np.array([k == 0]))
+        o1, r1, *_ = w.step(np.zeros(len(GAIN_NAMES), np.float32))
+        o2, r2, *_ = ref.step(a2)
+        np.testing.assert_array_equal(o1, o2)
+    venv = GainScheduleVecAction(VecMonitor(TowSB3VecEnv(WINCH, 2, seed=3, episode_seconds=20.0)), gains=g0)
+    w2 = GainScheduleAction(gym.make(WINCH, episode_seconds=20.0), gains=g0)
+    ov = venv.reset()
+    os_, _ = w2.reset(seed=3)
+    np.testing.assert_array_equal(ov[0], os_)
+    rng = np.random.default_rng(0)
+    for k in range(30):
+        a = rng.uniform(-1, 1, (2, len(GAIN_NAMES))).astype(np.float32)
+        ov, rv, _, _ = venv.step(a)
+        os_, rs, *_ = w2.step(a[0])
+        np.testing.assert_array_equal(ov[0], os_)
