@@ -167,7 +167,7 @@ def aggregate_policies(per_policy_scores: dict, reps: int = 2000, level: float =
 SEED_SUFFIX = _re.compile(r"^(?P<family>.+?)_(?:s|seed)(?P<seed>\d+)$")
 
 #: the baseline a policy's paired reduction is taken against (the goals' comparison baseline)
-GOAL_BASELINE = {"winch": "pd_ff", "compensator": "best_passive"}
+GOAL_BASELINE = {"winch": "along_cable", "compensator": "best_passive"}
 
 #: metrics of the "Across training seeds" section: key -> (label, percent?, digits)
 SEED_METRICS = {"rms_heave": ("RMS fish heave σ (m)", False, 3),

@@ -250,7 +250,8 @@ def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str 
     if plots:
         atomic_write(out / "summary.png", lambda p: _fig_summary(res, p), mode=None)
         atomic_write(out / "psd.png", lambda p: _fig_psd(res, p), mode=None)
-        best_bl = {"compensator": ["best_passive", "hover"], "winch": ["pd_ff", "constant_tension"]}[res.kind]
+        best_bl = {"compensator": ["best_passive", "skyhook", "clairvoyant_active"],
+                   "winch": ["along_cable", "clairvoyant"]}[res.kind]
         atomic_write(out / "timeseries.png", lambda p: _fig_timeseries(
             res, p, [c.name for c in trained] + [res.reference] + best_bl), mode=None)
         figs = ["summary.png", "psd.png", "timeseries.png"]

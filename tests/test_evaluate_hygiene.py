@@ -53,8 +53,8 @@ def _synthetic_result(names_trained, n_entries=12, replicates=1, seed=0, offset=
         for r in range(replicates):
             episodes.append((sea_key(sea), sea_label(sea, 3 + i // 4), sea, s + offset + 100 * r))
     rng = np.random.default_rng(seed)
-    bl = ["fixed_winch", "pd_ff"] if kind == "winch" else ["locked", "best_passive"]
-    amp = {"fixed_winch": 1.0, "pd_ff": 0.5, "locked": 1.0, "best_passive": 0.7}
+    bl = ["fixed_winch", "along_cable"] if kind == "winch" else ["locked", "best_passive"]
+    amp = {"fixed_winch": 1.0, "along_cable": 0.5, "locked": 1.0, "best_passive": 0.7}
     ctrls = [Controller(n, SimpleNamespace(), None, "trained", "synthetic", {"algo": "ppo", "seed": k})
              for k, n in enumerate(names_trained)]
     ctrls += [Controller(n, SimpleNamespace(), None, "baseline", "synthetic") for n in bl]
@@ -289,13 +289,13 @@ def test_across_training_seeds_section(tmp_path):
     assert groups == {"ppo_W": [("ppo_W_s0", 0), ("ppo_W_seed1", 1), ("ppo_W_s2", 2)], "sac_W": [("sac_W_s0", 0)]}
     res = _synthetic_result(names, n_entries=12, replicates=2)
     g = across_seeds(res, groups["ppo_W"], "ppo_W", reps=200)
-    assert g["n_seeds"] == 3 and g["n_tasks"] == 24 and g["baseline"] == "pd_ff"
+    assert g["n_seeds"] == 3 and g["n_tasks"] == 24 and g["baseline"] == "along_cable"
     x = np.array([[m["rms_heave"] for m in res.metrics[n]] for n, _ in groups["ppo_W"]])
     assert g["metrics"]["rms_heave"]["iqm"][0] == pytest.approx(iqm(x))
-    b = np.array([m["rms_heave"] for m in res.metrics["pd_ff"]])
-    red = g["metrics"]["reduction_vs_pd_ff"]["iqm"]
+    b = np.array([m["rms_heave"] for m in res.metrics["along_cable"]])
+    red = g["metrics"]["reduction_vs_along_cable"]["iqm"]
     assert red[0] == pytest.approx(iqm(1.0 - x / b)) and red[1] <= red[0] <= red[2]
-    assert g["per_seed"]["ppo_W_s2"]["reduction_vs_pd_ff"] == pytest.approx(1.0 - x[2].mean() / b.mean())
+    assert g["per_seed"]["ppo_W_s2"]["reduction_vs_along_cable"] == pytest.approx(1.0 - x[2].mean() / b.mean())
     md = write_report(res, tmp_path / "r", "t", plots=False, across_seeds=[g]).read_text()
     assert "## Across training seeds" in md and "3 training seeds" in md and "at least 3" not in md
     two = across_seeds(res, groups["ppo_W"][:2], "ppo_W", reps=100)
