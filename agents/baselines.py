@@ -18,6 +18,8 @@ gains do it then. ``acts_on`` says what a baseline uses:
 ``default_passive`` obs     the scene's fixed setting k = 20 kN/m, b = 5 kN s/m
 ``best_passive``    env     best fixed (k, b) per sea state from a grid search with no end-stop hits
 ``hover``           env     Hover et al. (1994) rules: min stiffness + damping for the travel, or lock
+``skyhook``         obs     skyhook semi-active law, gains per sea state (``agents.classical``)
+``clairvoyant_active`` env  bound: active stroke trajectory with perfect foresight (``agents.clairvoyant``)
 ==================  ======  ====================================================================
 
 ``towenv/WinchPayout-v0`` (action = payout speed / max speed):
@@ -28,6 +30,10 @@ gains do it then. ``acts_on`` says what a baseline uses:
                               heave + length centring, gains per sea state (grid/coordinate search)
 ``constant_tension``  env     the simulator's constant-tension winch (set tension = static top-segment
                               tension, gain per sea state)
+``along_cable``       obs     along-cable feed-forward + feedback, gains per sea state (``agents.classical``);
+                              the strongest causal classical baseline
+``clairvoyant``       env     reference: length trajectory planned with perfect foresight within the same
+                              limits (``agents.clairvoyant``)
 ====================  ======  ==================================================================
 
 Tuned values live in ``agents/hyperparams/baselines.yml`` (written by ``python -m agents.tuning``).

@@ -23,11 +23,11 @@ Hygiene:
 
 Examples::
 
-    python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0.zip --replicates 2 --seed-set final
+    python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0_s0.zip --replicates 2 --seed-set final
     python scripts/evaluate.py runs/ppo_s0.zip --also runs/ppo_s1.zip runs/ppo_s2.zip --replicates 2
     python scripts/evaluate.py pd_ff --env towenv/WinchPayout-v0 --name winch_baselines
     python scripts/evaluate.py run/final.zip --episodes 0 4 --env-kwargs episode_seconds:40   # quick look
-    python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0.zip --replicates 2 --html \\
+    python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0_s0.zip --replicates 2 --html \\
         --out-dir docs/reports --force                                   # replace the committed report
 """
 from __future__ import annotations
