@@ -11,13 +11,13 @@ import datetime as _dt
 import html
 import json
 import math
-import os
 import re
 from pathlib import Path
 
 import numpy as np
 
 from .evaluation import GOALS, EvalResult
+from towenv.atomic import atomic_write  # noqa: F401  (re-exported: agents.report.atomic_write)
 
 __all__ = ["write_report", "markdown_to_html", "MIN_VERDICT_EPISODES", "verdict", "atomic_write", "REPORT_FILES"]
 
@@ -61,37 +61,6 @@ def format_goal_value(goal: dict) -> str:
 
 def format_goal_group(goal: dict, v) -> str:
     return f"{v[0]:.3f}×" if goal.get("ratio") else f"{100 * v[0]:.1f} %"
-
-
-def atomic_write(path, write, mode: str = "w", **open_kw) -> Path:
-    """Write ``path`` atomically: ``write(f)`` on a temporary file in the same folder (``mode`` "w" or
-    "wb"), then ``os.replace``; ``write`` may instead be a ``str``/``bytes``, or — with ``mode=None`` — a
-    function of the temporary *path* (e.g. a figure's ``savefig``). On an exception the temporary file is
-    removed and an existing ``path`` is left as it was."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        if mode is None:
-            write(tmp)
-        else:
-            with open(tmp, mode, **open_kw) as f:
-                if isinstance(write, (str, bytes)):
-                    f.write(write)
-                else:
-                    write(f)
-                f.flush()
-                os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            tmp.unlink()
-        except FileNotFoundError:
-            pass
-        raise
-    return path
-
-_COLORS = ["#d62728", "#9467bd", "#1f77b4", "#ff7f0e", "#2ca02c", "#8c564b", "#e377c2", "#7f7f7f", "#17becf",
-           "#bcbd22"]
 
 
 def _ci(t, digits=3, pct=False):

@@ -35,8 +35,11 @@ def _plt():
 def _save(fig, path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=_DPI)
-    _plt().close(fig)
+    from .atomic import atomic_write
+    try:
+        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=_DPI), mode=None)
+    finally:
+        _plt().close(fig)
     return path
 
 

@@ -308,5 +308,7 @@ def write_timeseries_csv(result, path):
     cols, arr = timeseries_table(result)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(path, arr, delimiter=",", header=",".join(cols), comments="", fmt="%.8g")
+    from .atomic import atomic_write
+    atomic_write(path, lambda f: np.savetxt(f, arr, delimiter=",", header=",".join(cols), comments="", fmt="%.8g"),
+                 mode="wb")
     return path

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_savez
+
 
 @dataclass
 class Result:
@@ -34,45 +36,84 @@ class Result:
     actuators: dict = field(default_factory=dict)
 
     def save(self, path) -> Path:
-        """Write one ``.npz`` file (arrays) with the metadata embedded as JSON."""
+        """Write one ``.npz`` file (arrays) with the metadata embedded as JSON, atomically (a temporary
+        name, then a rename: an interrupt never leaves a partial file at ``path``). Any body, line or
+        actuator name round-trips (names live in a JSON table, not in the array keys)."""
         path = Path(path)
         if path.suffix != ".npz":
             path = path.with_suffix(".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
         arrays = {"t": self.t, "top_force": self.top_force, "top_tension": self.top_tension,
                   "tow_point": self.tow_point}
-        for b, d in self.bodies.items():
+        names = {"bodies": list(self.bodies), "lines": list(self.lines), "actuators": list(self.actuators)}
+        for i, (b, d) in enumerate(self.bodies.items()):
             for k, v in d.items():
-                arrays[f"body::{b}::{k}"] = v
-        for ln, d in self.lines.items():
+                arrays[f"body::{i}::{k}"] = v
+        for i, (ln, d) in enumerate(self.lines.items()):
             for k, v in d.items():
-                arrays[f"line::{ln}::{k}"] = v
-        for k, v in self.actuators.items():
-            arrays[f"actuator::{k}"] = v
+                arrays[f"line::{i}::{k}"] = v
+        for i, (k, v) in enumerate(self.actuators.items()):
+            arrays[f"actuator::{i}"] = v
+        arrays["__names__"] = np.array(json.dumps(names))
         arrays["__meta__"] = np.array(json.dumps(self.meta, default=float))
-        np.savez_compressed(path, **{k: v for k, v in arrays.items() if v is not None})
+        atomic_savez(path, {k: v for k, v in arrays.items() if v is not None})
         return path
 
     @classmethod
     def load(cls, path) -> "Result":
-        with np.load(Path(path), allow_pickle=False) as z:
-            bodies: dict = {}
-            lines: dict = {}
-            kw = {}
-            for key in z.files:
-                if key.startswith("body::"):
-                    _, b, k = key.split("::")
-                    bodies.setdefault(b, {})[k] = z[key]
-                elif key.startswith("line::"):
-                    _, ln, k = key.split("::")
-                    lines.setdefault(ln, {})[k] = z[key]
-                elif key.startswith("actuator::"):
-                    kw.setdefault("actuators", {})[key.split("::")[1]] = z[key]
-                elif key == "__meta__":
-                    kw["meta"] = json.loads(str(z[key]))
+        """Read a file written by :meth:`save`. A file that is empty, not an ``.npz``, truncated/corrupt or
+        that holds no record raises one ``ValueError`` naming the file and the problem (a missing file:
+        ``FileNotFoundError``)."""
+        path = Path(path)
+
+        def bad(what):
+            return ValueError(f"{path}: not a readable towenv result: {what}")
+
+        with open(path, "rb") as f:       # FileNotFoundError / IsADirectoryError name the path themselves
+            head = f.read(4)
+        if not head:
+            raise bad("the file is empty")
+        if head != b"PK\x03\x04":
+            raise bad("not an .npz (zip) file")
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {key: z[key] for key in z.files}
+        except Exception as exc:          # BadZipFile, zlib.error, EOFError, ValueError, OSError ...
+            raise bad(f"truncated or corrupt ({type(exc).__name__}: {exc})") from None
+        if "t" not in data:
+            raise bad("no time vector 't'")
+        try:
+            names = json.loads(str(data.pop("__names__"))) if "__names__" in data else None
+            meta = json.loads(str(data.pop("__meta__"))) if "__meta__" in data else {}
+        except ValueError as exc:
+            raise bad(f"corrupt metadata ({exc})") from None
+        bodies: dict = {}
+        lines: dict = {}
+        actuators: dict = {}
+        kw = {}
+        try:
+            for key, v in data.items():
+                kind, _, rest = key.partition("::")
+                if kind in ("body", "line"):
+                    ident, _, k = rest.rpartition("::")
+                    name = names["bodies" if kind == "body" else "lines"][int(ident)] if names else ident
+                    (bodies if kind == "body" else lines).setdefault(name, {})[k] = v
+                elif kind == "actuator":
+                    actuators[names["actuators"][int(rest)] if names else rest] = v
+                elif key in ("t", "top_force", "top_tension", "tow_point"):
+                    kw[key] = v
                 else:
-                    kw[key] = z[key]
-        return cls(bodies=bodies, lines=lines, **kw)
+                    raise KeyError(key)
+        except (KeyError, IndexError, ValueError, TypeError) as exc:
+            raise bad(f"unexpected array {exc}") from None
+        if not bodies and not lines:
+            raise bad("it holds no body or line records (only " + ", ".join(sorted(data)) + ")")
+        n = len(kw["t"])
+        for what, arr in ([("t", kw["t"])] + [(f"bodies[{b}].{k}", v) for b, d in bodies.items() for k, v in d.items()]
+                          + [(f"lines[{ln}].{k}", v) for ln, d in lines.items() for k, v in d.items()]):
+            if arr.ndim < 1 or len(arr) != n:
+                raise bad(f"{what} has {arr.shape[0] if arr.ndim else 0} samples, the time vector {n}")
+        return cls(bodies=bodies, lines=lines, meta=meta, actuators=actuators, **kw)
 
     def window(self, t_start: float) -> "Result":
         """The part of the record from ``t_start`` on (e.g. to drop the start-up ramp)."""

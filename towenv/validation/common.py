@@ -179,8 +179,11 @@ def savefig(fig, outdir: Path, name: str) -> str:
         fig.tight_layout()
     except Exception:  # pragma: no cover - layout is cosmetic
         pass
-    fig.savefig(outdir / name, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    from ..atomic import atomic_write
+    try:
+        atomic_write(outdir / name, lambda tmp: fig.savefig(tmp, dpi=110, bbox_inches="tight"), mode=None)
+    finally:
+        plt.close(fig)
     return f"{outdir.name}/{name}"
 
 
