@@ -14,5 +14,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from towenv.validation.report import main  # noqa: E402
 
+REPO = Path(__file__).resolve().parents[1]
+
 if __name__ == "__main__":
-    sys.exit(main())
+    argv = sys.argv[1:]
+    if "--out" not in argv and "-h" not in argv and "--help" not in argv:
+        # this repository's script refreshes the committed report; `towenv validate` writes under ./out/
+        argv += ["--out", str(REPO / ("out/validation_quick" if "--quick" in argv else "docs"))]
+    sys.exit(main(argv))

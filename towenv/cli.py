@@ -4,7 +4,9 @@
     towenv simulate two_part_tow_1 --duration 120 --out out/tpt1 --set vessel.speed=2.5
 
 ``simulate`` writes ``result.npz``, ``timeseries.csv``, ``summary.md``, ``summary.json`` and five PNG plots
-into the output folder. Scene and divergence errors print one line to stderr and exit with code 2.
+into the output folder, each atomically, ``summary.md`` last (its presence marks a complete set). Bad
+arguments, scene errors, an unusable output folder (checked before the run) and divergence print one line
+to stderr and exit with code 2.
 """
 from __future__ import annotations
 
@@ -61,7 +63,7 @@ def _positive(text: str) -> float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not (v > 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"must be > 0 (got {text})")
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0 (got {text})")
     return v
 
 
@@ -71,7 +73,7 @@ def _nonnegative(text: str) -> float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not (v >= 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"must be >= 0 (got {text})")
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0 (got {text})")
     return v
 
 
@@ -90,7 +92,11 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     pm.add_argument("scene", metavar="SCENE", help="embedded scene name (see `towenv scenes`) or path to a TOML file")
     pm.add_argument("--duration", type=_positive, default=120.0, help="simulated time in s (default 120)")
-    pm.add_argument("--out", metavar="DIR", default=None, help="output folder (default ./out/<scene>)")
+    pm.add_argument("--out", metavar="DIR", default=None,
+                    help="output folder (default ./out/<scene>); checked before the run; files of an earlier run "
+                         "there are replaced (a note says so), unless --no-overwrite")
+    pm.add_argument("--no-overwrite", action="store_true",
+                    help="refuse (exit 2) when the output folder already holds results of an earlier run")
     pm.add_argument("--dt", type=_positive, default=None, help="time step in s (overrides solver.dt)")
     pm.add_argument("--fidelity", type=_fraction, default=None, metavar="TOL",
                     help="choose dt, segments and 2-D/3-D automatically so the fish heave/pitch statistics stay "
@@ -168,10 +174,13 @@ def _out_name(scene_arg: str, scene) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name) or "run"
 
 
+#: the files `towenv simulate` writes; summary.md is written last and marks a complete set
+OUTPUT_FILES = ("result.npz", "timeseries.csv", "summary.json", "summary.md")
+
+
 def cmd_simulate(args) -> int:
-    from .core.result import Result  # noqa: F401  (import check)
-    from .core.run import simulate
-    from .core.simulator import Simulator
+    from .atomic import atomic_write, check_output_dir
+    from .core.run import make_simulator, plan_records, simulate
     from .errors import SimulationDivergence
     from .report import default_discard, summarize, summary_markdown, write_timeseries_csv
     from .scene import SceneError
@@ -185,7 +194,8 @@ def cmd_simulate(args) -> int:
         from .fidelity import configure
         scene = load(args.scene)
         scene, choice = configure(scene, tolerance=args.fidelity, overrides=overrides)
-        sim = Simulator(scene, **overrides)
+        # one factory: the time integration named by solver.method (houbolt, generalized_alpha, euler, …)
+        sim = make_simulator(scene, **overrides)
     except SceneError as exc:
         return _error(_one_line(exc))
     except ValueError as exc:                 # fidelity selection impossible for this scene
@@ -204,7 +214,29 @@ def cmd_simulate(args) -> int:
         discard = float(args.discard)
     if discard >= duration:
         return _error(f"--discard ({discard:g} s) must be shorter than --duration ({duration:g} s)")
+    # the run must fit in memory and leave >= 2 recorded samples for the statistics: checked before it starts
+    every = max(1, int(round(0.05 / sim.dt)))
+    try:
+        n_steps, n_rec = plan_records(sim, duration, every)
+    except ValueError as exc:
+        return _error("--" + _one_line(exc))
+    rec_dt = every * sim.dt
+    kept = n_rec - max(0, math.ceil(discard / rec_dt - 1e-6))
+    if kept < 2:
+        return _error(f"--duration: {duration:g} s records {n_rec} sample(s), one every {rec_dt:g} s: fewer than the 2 "
+                      f"the statistics need after the start-up window of {discard:g} s; use a longer --duration"
+                      + (" or a shorter --discard" if args.discard is not None else ""))
+
     out = Path(args.out) if args.out else Path("out") / _out_name(args.scene, sim.scene)
+    problem = check_output_dir(out)
+    if problem:
+        return _error(f"--out {out}: {problem}")
+    earlier = [f for f in OUTPUT_FILES if (out / f).exists()]
+    if earlier:
+        if args.no_overwrite:
+            return _error(f"--out {out}: holds the results of an earlier run ({', '.join(earlier)}); "
+                          f"choose another folder or drop --no-overwrite")
+        print(f"towenv: note: replacing the results of an earlier run in {out}", file=sys.stderr)
 
     if not args.quiet:
         print(f"simulating {sim.scene.name!r} for {duration:g} s (dt = {sim.dt:g} s)"
@@ -223,20 +255,24 @@ def cmd_simulate(args) -> int:
     if choice is not None:
         res.meta["fidelity"] = choice.summary()
 
-    out.mkdir(parents=True, exist_ok=True)
+    # every file is written atomically (temporary name, then rename); the old summary — the completion mark
+    # of the earlier set — goes first and the new one is written last, so an interrupted write never leaves
+    # a folder that looks complete
+    for f in ("summary.md", "summary.json"):
+        (out / f).unlink(missing_ok=True)
     res.save(out / "result.npz")
     write_timeseries_csv(res, out / "timeseries.csv")
     summary = summarize(res, discard)
     if overrides:
         summary["overrides"] = {k: v for k, v in overrides.items()}
-    md = summary_markdown(summary, title=sim.scene.name)
-    (out / "summary.md").write_text(md, encoding="utf-8")
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n",
-                                      encoding="utf-8")
     if not args.no_plots:
         from .plots import save_all
         mean, heading, _ = sim.path.mean_path(res.t)
         save_all(res, out, discard=discard, track=(mean, heading))
+    md = summary_markdown(summary, title=sim.scene.name)
+    atomic_write(out / "summary.json", json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n",
+                 encoding="utf-8")
+    atomic_write(out / "summary.md", md, encoding="utf-8")
 
     if not args.quiet:
         print(md)

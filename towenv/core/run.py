@@ -1,6 +1,8 @@
 """``simulate``: run a scene for a duration and record a :class:`Result`."""
 from __future__ import annotations
 
+import math
+import os
 import time
 
 import numpy as np
@@ -48,18 +50,13 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
     ``_compiled=False``, kept for the tests). The first run after installing or after ``kernels.py``
     changes compiles the recording loop (~5 s, then cached on disk).
     """
-    if not (duration > 0):
-        raise ValueError(f"duration: must be > 0 s (got {duration})")
+    duration = _finite_positive("duration", duration)
+    if record_interval is not None:
+        record_interval = _finite_positive("record_interval", record_interval)
     sim = scene if isinstance(scene, Simulator) else make_simulator(scene, **overrides)
     dt = sim.dt
-    if record_interval is None:
-        every = max(1, int(round(0.05 / dt)))
-    else:
-        if not (record_interval > 0):
-            raise ValueError(f"record_interval: must be > 0 s (got {record_interval})")
-        every = max(1, int(round(record_interval / dt)))
-    n_steps = int(round(duration / dt))
-    n_rec = n_steps // every + 1
+    every = max(1, int(round((0.05 if record_interval is None else record_interval) / dt)))
+    n_steps, n_rec = plan_records(sim, duration, every)
     rec = Recorder(sim, n_rec)
     rec.record()
     bar = None
@@ -93,6 +90,43 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
     return res
 
 
+def _finite_positive(name, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be a finite number of seconds > 0 (got {value!r})") from None
+    if not (math.isfinite(v) and v > 0):
+        raise ValueError(f"{name}: must be a finite number of seconds > 0 (got {value!r})")
+    return v
+
+
+def available_memory() -> int:
+    """Bytes of memory available now (Linux ``SC_AVPHYS_PAGES``; elsewhere 8 GiB is assumed)."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-Linux
+        return 8 << 30
+
+
+def plan_records(sim, duration: float, every: int) -> tuple[int, int]:
+    """``(n_steps, n_records)`` of a run of ``duration`` s recorded every ``every`` steps, refusing (with a
+    ``ValueError`` naming ``duration``) a run shorter than one step or one whose record would not fit in
+    half of the memory available now."""
+    dt = sim.dt
+    steps = duration / dt
+    if steps < 0.5:
+        raise ValueError(f"duration: {duration:g} s is shorter than one time step (dt = {dt:g} s)")
+    n_rec_f = steps / every + 1
+    need = n_rec_f * Recorder.bytes_per_record(sim)
+    avail = available_memory()
+    if need > 0.5 * avail:
+        size = f"{n_rec_f:.3g} samples (~{need / 2**30:.3g} GiB)" if math.isfinite(need) else "more than 1e300 samples"
+        raise ValueError(f"duration: {duration:g} s at dt = {dt:g} s would record {size}, more than half of the memory available "
+                         f"({avail / 2**30:.3g} GiB): shorten the run or record less often (record_interval)")
+    n_steps = int(round(steps))
+    return n_steps, n_steps // every + 1
+
+
 class Recorder:
     """Collects the state of a Simulator into preallocated arrays."""
 
@@ -122,6 +156,17 @@ class Recorder:
         if self.has_winch:
             self.actuators.update({k: np.zeros(n) for k in ("payout_speed", "deployed_length")})
         self._fast_init(n)
+
+    @staticmethod
+    def bytes_per_record(sim) -> int:
+        """Upper estimate of the memory one record takes (raw buffers, the time series and the copies
+        ``result()`` makes)."""
+        s = sim.system
+        nb, nr = len(s.bodies), s.n_rigid
+        cap = s.n_nodes + (64 if sim.winch[0] > 0 else 0)
+        per = (1 + 6 + 3 * s.n_nodes + 9 * nb + 18 * nr + s.n_segments     # t, forces, raw state buffers
+               + nb * (12 + 3) + 2 * (4 * cap) + 6)                          # series + line arrays + actuators
+        return 8 * 2 * per
 
     def _fast_init(self, n):
         s = self.sim.system

@@ -12,11 +12,15 @@ from pathlib import Path
 import numpy as np
 
 from . import channel, hover, problems, srivastava, thesis, trials
+from ..atomic import atomic_write
 from .common import CaseContext, env_fingerprint, fmt
 
 CASES = {"thesis": thesis, "channel": channel, "hover": hover, "srivastava": srivastava, "trials": trials}
-REPO = Path(__file__).resolve().parents[2]
-DOCS = REPO / "docs"
+# outputs go where the user runs the command (never into the installed package): ``out/validation`` and
+# ``out/validation_quick`` under the working directory, or ``--out``; ``scripts/validate.py`` (the repository's
+# script) passes ``--out docs`` to refresh the committed report
+DEFAULT_OUT = Path("out") / "validation"
+DEFAULT_QUICK_OUT = Path("out") / "validation_quick"
 FULL_CMD = "python scripts/validate.py"
 QUICK_CMD = "python scripts/validate.py --quick"
 RENDER_CMD = "python scripts/validate.py --report-only"
@@ -42,7 +46,7 @@ def _jsonable(x):
 def run_cases(names=None, quick=False, outdir: Path | None = None, progress=True, log=print) -> dict:
     """Run the named cases (default: all) and return ``{"meta": ..., "cases": {name: dict}}``."""
     names = list(names or CASES)
-    outdir = Path(outdir) if outdir is not None else DOCS / "validation"
+    outdir = Path(outdir) if outdir is not None else DEFAULT_OUT / "validation"
     outdir.mkdir(parents=True, exist_ok=True)
     ctx = CaseContext(quick=quick, outdir=outdir, progress=progress, log=log)
     results, timing = {}, {}
@@ -78,8 +82,7 @@ def run_cases(names=None, quick=False, outdir: Path | None = None, progress=True
 def save_cache(data: dict, path: Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, indent=1, ensure_ascii=False), encoding="utf-8")
-    return path
+    return atomic_write(path, json.dumps(data, indent=1, ensure_ascii=False), encoding="utf-8")
 
 
 def load_cache(path: Path) -> dict:
@@ -133,8 +136,9 @@ def render(data: dict, path: Path | None = None) -> str:
              "writes this file, the figures and the result cache `docs/validation/results.json`.")
     L.append(f"* Re-render this file from the cache without simulating: `{RENDER_CMD}`.")
     L.append(f"* Quick version (what CI runs, `tests/test_validation.py`): `{QUICK_CMD}` (writes to "
-             "`out/validation_quick/`); one case: `--cases hover`. `towenv validate` and `python -m towenv.validation` "
-             "are the same command.")
+             "`out/validation_quick/`); one case: `--cases hover`. From an installed package, `towenv validate` "
+             "(or `python -m towenv.validation`) runs the same cases and writes the report under the working "
+             "directory: `out/validation/` (`out/validation_quick/` with `--quick`), or `--out DIR`.")
     env = meta["env"]
     L.append(f"* Environment of this run: towenv {env['towenv']}, Python {env['python']}, numpy {env['numpy']}, "
              f"scipy {env['scipy']}, numba {env['numba']}, {env['machine']} with {env['cpus']} CPUs. Wall time per "
@@ -203,7 +207,7 @@ def render(data: dict, path: Path | None = None) -> str:
             L.append("")
     text = "\n".join(L).rstrip() + "\n"
     if path is not None:
-        Path(path).write_text(text, encoding="utf-8")
+        atomic_write(path, text, encoding="utf-8")
     return text
 
 
@@ -214,25 +218,38 @@ def _anchor(title: str) -> str:
     return a.replace(" ", "-")
 
 
+def _unwritable(root: Path) -> str | None:
+    """Why ``root`` cannot hold the report (None when it can): checked before any case runs."""
+    from ..atomic import check_output_dir
+    return check_output_dir(root)
+
+
 def main(argv=None) -> int:
     import argparse
+    import sys
     p = argparse.ArgumentParser(prog="validate", description="Run the towenv validation cases and write the report.")
     p.add_argument("--quick", action="store_true", help="short runs and few variants (the CI version)")
     p.add_argument("--cases", nargs="+", choices=list(CASES), help="run only these cases")
     p.add_argument("--out", type=Path, default=None,
-                   help="output folder for the report, figures and cache (default: docs/ for the full run, "
-                        "out/validation_quick/ for --quick)")
+                   help="output folder for the report, figures and cache, relative to the working directory "
+                        "(default: out/validation/ for the full run, out/validation_quick/ for --quick; "
+                        "scripts/validate.py in the repository passes --out docs)")
     p.add_argument("--report-only", action="store_true", help="re-render the Markdown from the cached results")
     p.add_argument("--no-progress", action="store_true", help="plain log lines instead of progress bars")
     a = p.parse_args(argv)
-    if a.out is None:
-        root = DOCS if not a.quick else REPO / "out" / "validation_quick"
-    else:
-        root = a.out
+    root = a.out if a.out is not None else (DEFAULT_QUICK_OUT if a.quick else DEFAULT_OUT)
     figdir = root / "validation"
     md = root / "validation.md"
     cache = figdir / "results.json"
+    problem = _unwritable(root)
+    if problem:
+        print(f"validate: error: --out {root}: {problem}", file=sys.stderr)
+        return 2
     if a.report_only:
+        if not cache.is_file():
+            print(f"validate: error: --report-only needs the result cache {cache} of an earlier run "
+                  f"(run without --report-only first, or give its --out)", file=sys.stderr)
+            return 2
         data = load_cache(cache)
         render(data, md)
         print(f"rendered {md} from {cache}")
