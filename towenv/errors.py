@@ -14,5 +14,5 @@ class SimulationDivergence(RuntimeError):
         self.cause = cause
         self.iterations = iterations
         self.residual = residual
-        super().__init__(f"simulation diverged at t = {time:.4f} s in {element}: {cause} "
-                         f"(iterations {iterations}, last max|dT| = {residual:.3g} N)")
+        detail = f" (iterations {iterations}, last max|dT| = {residual:.3g} N)" if iterations > 0 else ""
+        super().__init__(f"simulation diverged at t = {time:.4f} s in {element}: {cause}{detail}")

@@ -45,7 +45,14 @@ __all__ = [
 SCENES_DIR = Path(__file__).resolve().parent / "scenes"
 SCENE_DATA_DIR = SCENES_DIR / "data"
 DEFAULT_SCENE = "two_part_tow_1"
-MAX_SEGMENTS = 1_000_000          # sanity limit on the segment count of one line
+# Segment count of one line and of the whole scene. Why 5000: the build costs ~0.7 ms per segment (3.5 s at
+# 5000, 17.5 s at 20 000, measured on the two-part tow), and segments that short need a tiny Δt for the
+# tension iteration to converge (the two-part tow's 20 m secondary diverges from ~150 segments at Δt = 0.02 s,
+# transverse Courant number c_T·Δt/l ≈ 2.5; the divergence message names the number) — 5000 is far beyond
+# any embedded scene (≤ 100) and the fidelity study.
+MAX_SEGMENTS = 5000
+_SEGMENTS_WHY = ("longer chains build slowly (~0.7 ms per segment) and segments that short need a tiny Δt "
+                 "for the tension iteration to converge (transverse Courant number c_T·Δt/l, model.md 5.9)")
 _INTERNAL = "internal error while validating the scene"
 
 
@@ -335,6 +342,11 @@ def Vec3(*, gt=None, ge=None, lt=None, le=None, abs_le=None, unit="m"):
 def _validate_name(v):
     if not isinstance(v, str) or not v.strip():
         _value_error("must be a non-empty string")
+    bad = sorted({repr(c) for c in v if ord(c) < 32 or ord(c) == 127 or c == ","})
+    if bad:
+        # control characters (NUL, newline, tab …) and commas would break the CSV header, the Markdown
+        # summary and file names; any other character round-trips through Result.save/load
+        _value_error(f"must not contain control characters or commas (found {', '.join(bad)})")
     return v
 
 
@@ -360,7 +372,8 @@ def _choice(*allowed: str):
 
 
 def _validate_segments(v):
-    msg = f"must be an integer in [1, {MAX_SEGMENTS}] or a list of such integers, one per span (top end first)"
+    msg = (f"must be an integer in [1, {MAX_SEGMENTS}] or a list of such integers, one per span (top end first), "
+           f"{MAX_SEGMENTS} in all at most: {_SEGMENTS_WHY}")
 
     def one(x):
         if not _is_integer(x) or not 1 <= int(x) <= MAX_SEGMENTS:
@@ -983,8 +996,8 @@ class Solver(_Model):
     angle_tolerance: Num(gt=0, unit="rad") = 1e-5
     max_iterations: Int(ge=1) = 25
     max_step_cuts: Int(ge=0) = 4
-    max_strain: Num(gt=0) = 0.2
-    settle_time: Num(ge=0, unit="s") = 0.0
+    max_strain: Num(gt=0, le=1) = 0.2          # a cable stretched beyond twice its length has failed
+    settle_time: Num(ge=0, le=3600, unit="s") = 0.0
     planar: bool = False        # 2-D vertical-plane model: lateral node motion, body roll and yaw frozen
     newton_stop: _choice("change", "estimate") = "change"
 
@@ -1275,6 +1288,28 @@ class Scene(_Model):
                 if self.winch.min_length is not None and self.winch.min_length > ln.length:
                     probs.append(("winch.min_length", f"must be <= the initial length {ln.length:g} m "
                                                       f"(got {self.winch.min_length!r})"))
+        if probs:
+            _problems(*probs)
+        return self
+
+    @model_validator(mode="after")
+    def _check_solver_support(self):
+        """What only some time integrations support, refused here rather than at run time."""
+        probs: list[tuple[str, str]] = []
+        method = self.solver.method
+        if method != "houbolt":
+            for fld in ("compensator", "winch"):
+                if getattr(self, fld) is not None:
+                    probs.append(("solver.method", f"{method!r} cannot simulate a {fld} (only \"houbolt\" models "
+                                                   f"the actuators); use \"houbolt\" or remove [{fld}]"))
+            if self.solver.settle_time > 0:
+                probs.append(("solver.settle_time", f"must be 0 with solver.method = {method!r} (the dynamic "
+                                                    f"settle runs with \"houbolt\" only; got {self.solver.settle_time:g})"))
+        if method in ("generalized_alpha", "newmark") and self.sea is not None and self.sea.orbital_velocities:
+            probs.append(("sea.orbital_velocities", f"not supported by solver.method = {method!r} (use \"houbolt\")"))
+        total = sum(sum(ln.segments) if isinstance(ln.segments, tuple) else ln.segments for ln in self.lines)
+        if total > MAX_SEGMENTS:
+            probs.append(("lines", f"{total} segments in all: at most {MAX_SEGMENTS} per scene — {_SEGMENTS_WHY}"))
         if probs:
             _problems(*probs)
         return self

@@ -139,6 +139,7 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
     v0 = np.empty_like(v)
     a0 = np.empty_like(ang)
     w0 = np.empty_like(omg)
+    t0 = np.empty_like(tens)
     top_r = np.empty(3)
     top_v = np.empty(3)
     prev = np.empty(3)
@@ -151,6 +152,7 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
         v0[:] = v
         a0[:] = ang
         w0[:] = omg
+        t0[:] = tens
         nst = 1 if scheme == EULER else (2 if scheme == RK2 else 4)
         for stage in range(nst):
             if scheme == RK2:
@@ -176,6 +178,7 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
                 r[top_node, i] = top_r[i]
                 v[top_node, i] = top_v[i]
             if not _rates(r, v, ang, omg, top_r, top_v, topo, segp, bodyp, env, c_axial, ws, kk[1], kk[2], kk[3], tens):
+                _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                 return K.FAIL_NAN, k, -1
             for a in range(nn):
                 for i in range(3):
@@ -225,6 +228,7 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
         for a in range(nn):
             for i in range(3):
                 if not math.isfinite(r[a, i]) or not math.isfinite(v[a, i]):
+                    _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                     return K.FAIL_NAN, k, a
         ea = segp[7]
         l0 = segp[0]
@@ -235,11 +239,23 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
             dy = r[seg_up[s], 1] - r[seg_lo[s], 1]
             dz = r[seg_up[s], 2] - r[seg_lo[s], 2]
             if math.sqrt(dx * dx + dy * dy + dz * dz) / l0[s] - 1.0 > max_strain:
+                _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                 return K.FAIL_STRETCH, k, s
         for b in range(nb):
             if abs(ang[b, 1]) > 1.48 or not math.isfinite(ang[b, 1]):
+                _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                 return K.FAIL_ANGLE, k, b
     return K.OK, -1, -1
+
+
+@njit(cache=True)
+def _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0):
+    """Put the state of the last good step back after a failed one (the simulator keeps it)."""
+    r[:] = r0
+    v[:] = v0
+    ang[:] = a0
+    omg[:] = w0
+    tens[:] = t0
 
 
 class ExplicitSimulator(Simulator):
@@ -298,10 +314,17 @@ class ExplicitSimulator(Simulator):
         self._sync()
         if st != K.OK:
             from ..errors import SimulationDivergence
-            raise SimulationDivergence(t_start + (k + 1) * dt, self._element_name(st, el),
+            raise SimulationDivergence(t_start + (k + 1) * dt, self._explicit_element(st, el),
                                        f"explicit {self.scheme} step unstable: "
-                                       + {K.FAIL_NAN: "non-finite state", K.FAIL_STRETCH: "strain above max_strain",
-                                          K.FAIL_ANGLE: "body pitch beyond ±85°"}.get(st, str(st)))
+                                       + {K.FAIL_NAN: "non-finite state",
+                                          K.FAIL_STRETCH: f"strain above solver.max_strain = {self.settings.max_strain:g}",
+                                          K.FAIL_ANGLE: "body pitch beyond ±85°"}.get(st, str(st))
+                                       + f" (Δt = {dt:g} s; the state is left at the last good step)")
+
+    def _explicit_element(self, st, el):
+        if st == K.FAIL_NAN and el >= 0:
+            return self._node_name(el)
+        return self._element_name(st, el)
 
     def _sync(self):
         """Expose the explicit state through the Simulator's history arrays (outputs, snapshots)."""

@@ -98,6 +98,12 @@ class Simulator:
         dotted = {k: v for k, v in overrides.items() if k not in short}
         dotted.update({f"solver.{k}": v for k, v in short.items()})
         self.scene = load(scene, dotted)
+        method = _get(_get(self.scene, "solver"), "method", "houbolt")
+        if type(self) is Simulator and method != "houbolt":
+            from ..scene import SceneError
+            raise SceneError([("solver.method", f"{method!r}: towenv.Simulator is the Houbolt scheme; build the "
+                               f"simulator with towenv.make_simulator(scene), which uses the scheme "
+                               f"solver.method names (as towenv.simulate and `towenv simulate` do)")])
         self.system: System = build_system(self.scene)
         solver = _get(self.scene, "solver")
         self.settings = SolverSettings(**{k: _get(solver, k, getattr(SolverSettings, k))
@@ -355,8 +361,10 @@ class Simulator:
         settle = float(self.settings.settle_time or 0.0)
         if settle > 0:
             n = int(round(settle / dt))
-            tops = x0 + np.outer(dt * np.arange(1, n + 1), U)
-            self._run(tops, dt, t_start=-settle)
+            block = 65536              # tow-point positions are built per block: memory stays bounded
+            for b in range(0, n, block):
+                tops = x0 + np.outer(dt * np.arange(b + 1, min(n, b + block) + 1), U)
+                self._run(tops, dt, t_start=-settle + b * dt)
             shift = n * dt * U
             self.hist_r -= shift
             self.step_count = 0
@@ -443,6 +451,7 @@ class Simulator:
         cause = _CAUSES.get(st, f"status {st}")
         if st == K.FAIL_NEWTON:
             cause = cause.replace("(after step cuts)", f"(after {self.settings.max_step_cuts} step halvings)")
+            cause += self._courant_hint(el)
         return SimulationDivergence(t_fail, self._element_name(st, el), cause, int(self.settings.max_iterations),
                                     float(md))
 
@@ -560,11 +569,28 @@ class Simulator:
                 "top_segment_length": float(self.system.l0[lm.segments[0]])}
 
     def advance(self, seconds: float) -> None:
-        """Advance by ``seconds`` (rounded to whole steps of ``dt``)."""
-        n = int(round(seconds / self.settings.dt))
-        self.advance_steps(n)
+        """Advance by ``seconds`` (rounded to whole steps of ``dt``; 0 does nothing). ``seconds`` must be a
+        finite number >= 0 (``ValueError`` otherwise)."""
+        ok = isinstance(seconds, (int, float, np.integer, np.floating)) and not isinstance(seconds, (bool, np.bool_))
+        sec = float(seconds) if ok else float("nan")
+        if not (math.isfinite(sec) and sec >= 0):
+            raise ValueError(f"seconds: must be a finite number >= 0 (got {seconds!r})")
+        self.advance_steps(int(round(sec / self.settings.dt)))
+
+    #: longest run handed to the kernel in one call (its tow-point positions are an (n, 3) array)
+    _MAX_CALL_STEPS = 1 << 20
 
     def advance_steps(self, n: int) -> None:
+        """Advance by ``n`` whole time steps (an integer >= 0; 0 does nothing)."""
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(f"n: must be an integer number of steps >= 0 (got {n!r})")
+        n = int(n)
+        while n > self._MAX_CALL_STEPS:
+            self._advance_steps(self._MAX_CALL_STEPS)
+            n -= self._MAX_CALL_STEPS
+        self._advance_steps(n)
+
+    def _advance_steps(self, n: int) -> None:
         if n <= 0:
             return
         dt = self.settings.dt
@@ -609,6 +635,39 @@ class Simulator:
         return out
 
     # ------------------------------------------------------------------------------------------
+    def transverse_courant(self) -> np.ndarray:
+        """Per segment, the transverse Courant number c_T·Δt/l of the initial (static) state, with
+        c_T = √(T / (μ + μ_added)): short, taut segments at a long Δt make it large, and the tension
+        iteration's convergence degrades above ~2 (model.md 5.9)."""
+        s = self.system
+        n = min(len(self.static_tensions), len(s.l0))
+        T = np.maximum(self.static_tensions[:n], 0.0)
+        m_add = 0.25 * np.pi * s.diam[:n] ** 2 * s.can[:n] * s.rho
+        return self.settings.dt * np.sqrt(T / (s.mu[:n] + m_add)) / s.l0[:n]
+
+    def _courant_hint(self, seg: int) -> str:
+        """For a Newton failure in segment ``seg``: why, when its Courant number is the likely reason."""
+        try:
+            c = float(self.transverse_courant()[seg])
+        except (IndexError, ValueError, AttributeError):
+            return ""
+        if not c > 1.5:
+            return ""
+        dt = self.settings.dt
+        return (f"; its transverse Courant number c_T·Δt/l is {c:.2g}: the segment is short for Δt = {dt:g} s "
+                f"(the tension iteration needs it below ~1.5-2, model.md 5.9) — use fewer segments on this "
+                f"line or Δt <= {dt * 1.5 / c:.2g} s")
+
+    def _node_name(self, j: int) -> str:
+        """``"node 3 of line 'primary' (global 3)"`` (a body's node: ``"node 9 (body 'fish')"``)."""
+        for b in self.system.bodies:
+            if b.node == j:
+                return f"node {j} (body {b.name!r})"
+        for lm in self.system.lines:
+            if j in lm.nodes:
+                return f"node {int(np.where(lm.nodes == j)[0][0])} of line {lm.name!r} (global {j})"
+        return f"node {j}"
+
     def _element_name(self, status, el):
         s = self.system
         if el < 0:
