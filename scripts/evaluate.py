@@ -24,9 +24,11 @@ Hygiene:
 Examples::
 
     python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0_s0.zip --replicates 2 --seed-set final
-    python scripts/evaluate.py runs/ppo_s0.zip --also runs/ppo_s1.zip runs/ppo_s2.zip --replicates 2
+    python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0_s0.zip \\
+        --also agents/trained/ppo_WinchPayout-v0_s1.zip agents/trained/ppo_WinchPayout-v0_s2.zip --replicates 2
     python scripts/evaluate.py pd_ff --env towenv/WinchPayout-v0 --name winch_baselines
-    python scripts/evaluate.py run/final.zip --episodes 0 4 --env-kwargs episode_seconds:40   # quick look
+    python scripts/evaluate.py agents/trained/ppo_CompensatorGains-v0_s0.zip --episodes 0 4 \\
+        --env-kwargs episode_seconds:40                                           # quick look
     python scripts/evaluate.py agents/trained/ppo_WinchPayout-v0_s0.zip --replicates 2 --html \\
         --out-dir docs/reports --force                                   # replace the committed report
 """
@@ -181,6 +183,8 @@ def seed_set_sentence(seed_set: str, replicates: int) -> str:
 # ------------------------------------------------------------------------------------------ main
 def main(argv=None):
     args = parse_args(argv)
+    from towenv.extras import require_extra
+    require_extra("rl", "evaluate.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
     import torch
     torch.set_num_threads(1)
     from agents.aggregate import across_seeds, seed_groups

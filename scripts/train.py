@@ -20,8 +20,14 @@ Examples::
     python scripts/train.py --algo sac --env towenv/CompensatorGains-v0 --n-timesteps 200000 \\
         --max-minutes 30 --export agents/trained/sac_CompensatorGains-v0.zip
     python scripts/train.py --algo ppo --env towenv/WinchPayout-v0 --resume      # continue the run
-    python scripts/train.py --algo ppo --env towenv/WinchPayout-v0 --n-timesteps 3000 \\
-        --env-kwargs episode_seconds:30 --eval-freq 0                              # smoke run
+    python scripts/train.py --algo ppo --env towenv/WinchPayout-v0 --n-timesteps 4096 \\
+        --env-kwargs episode_seconds:30 --eval-freq 0                              # smoke run (~1 min)
+
+How long: the YAML recipes (agents/hyperparams/ppo.yml) train 6 M steps on WinchPayout and 4 M on
+CompensatorGains, ~35 and ~25-30 min per seed on one core of the project's 2-core machine (2300-3400
+env steps/s with 16 batched copies; docs/agents.md). PPO collects n_steps x n_envs steps per update
+(16 x 256 = 4096 for CompensatorGains, 16 x 1024 for WinchPayout) and rounds --n-timesteps up to a
+multiple of it (the script says so).
 """
 from __future__ import annotations
 
@@ -39,6 +45,10 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
+
+if __name__ == "__main__":          # before the SB3 callback classes below are defined
+    from towenv.extras import require_extra
+    require_extra("rl", "train.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
 
 
 def parse_args(argv=None):
@@ -135,8 +145,17 @@ def batched_venv(env_id: str, n_envs: int, env_kwargs: dict, wrappers, seed: int
     return venv
 
 
+def rollout_steps(model) -> int:
+    """Steps an SB3 model collects per update: ``n_steps × n_envs`` on-policy (PPO, A2C), ``n_envs``
+    off-policy; ``learn`` rounds the total up to a multiple of it."""
+    n_envs = int(getattr(model, "n_envs", 1) or 1)
+    return int(getattr(model, "n_steps", 1)) * n_envs
+
+
 def main(argv=None):
     args = parse_args(argv)
+    from towenv.extras import require_extra
+    require_extra("rl", "train.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
     import numpy as np
     import torch
     torch.set_num_threads(max(1, args.threads))
@@ -230,6 +249,12 @@ def main(argv=None):
         callbacks.append(_WallClock(args.max_minutes * 60.0))
 
     remaining = max(0, n_timesteps - start_steps)
+    chunk = rollout_steps(model)
+    if remaining % chunk:
+        planned = -(-remaining // chunk) * chunk
+        print(f"[train] note: {args.algo} collects {chunk} steps at a time ("
+              + (f"n_steps {model.n_steps} × n_envs {model.n_envs}" if hasattr(model, "n_steps") else f"n_envs {model.n_envs}")
+              + f"), so {remaining} steps become {planned}", flush=True)
     t0 = time.time()
     print(f"[train] {args.algo} on {args.env}: {remaining} steps to go (of {n_timesteps}), n_envs={n_envs}, "
           f"run dir {run}", flush=True)
