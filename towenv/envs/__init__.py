@@ -11,6 +11,11 @@ with string entry points (the environment modules are imported only by ``gym.mak
 call; ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``). The stable-baselines3
 adapter is :class:`towenv.envs.sb3.TowSB3VecEnv`. No ``max_episode_steps`` is
 registered: the environments truncate themselves at ``episode_seconds`` (default 300 s = 3000 steps).
+
+Errors (:mod:`towenv.envs.checks`, docs/environments.md "Errors and validation"): an invalid constructor keyword or
+``reset`` option raises :class:`ConfigError` (a ``ValueError``), a malformed action :class:`ActionError` (a
+``ValueError``), and ``step`` before ``reset`` or after an episode ended :class:`ResetNeeded` (a
+``gymnasium.error.ResetNeeded`` and a ``RuntimeError``).
 """
 from __future__ import annotations
 
@@ -34,6 +39,7 @@ _LAZY = {
     "TowSB3VecEnv": ".sb3",
     "Observer": ".pieces", "CHANNELS": ".pieces", "RandomCodeSeas": ".pieces", "FixedSeas": ".pieces",
     "HeavePitchReward": ".pieces", "HeaveOnlyReward": ".pieces", "default_eval_sea_states": ".pieces",
+    "ConfigError": ".checks", "ActionError": ".checks", "ResetNeeded": ".checks",
 }
 
 __all__ = ["ENV_IDS", *_LAZY]

@@ -13,6 +13,7 @@ physics steps of ``dt`` (action repetition = sub-stepping); ``env.dt = dt·subst
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 from typing import Any, Mapping, Sequence
 
@@ -22,9 +23,17 @@ from gymnasium import spaces
 from numba import njit
 
 from ..core import batch as BT
-from .pieces import HeavePitchReward, Observer, RandomCodeSeas, default_eval_sea_states
+from ..sea import SeaState
+from ..sea.spectra import _CONVENTIONS as SEA_CONVENTIONS
+from . import checks as C
+from .pieces import CHANNELS, HeavePitchReward, Observer, RandomCodeSeas, default_eval_sea_states
 
-__all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD", "EnvRows"]
+__all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD", "EnvRows", "RESET_OPTIONS", "MAX_OBS_DELAY"]
+
+#: the keys ``reset(options=...)`` accepts (anything else raises :class:`~towenv.envs.checks.ConfigError`)
+RESET_OPTIONS = ("eval_index", "sea_state", "sea_seed", "vessel_speed", "cable_length")
+#: largest observation delay (control steps) the constructor accepts
+MAX_OBS_DELAY = 1000
 
 #: ASSUMED breaking loads (N) of the default scene's cables (neither the thesis nor the scene gives
 #: them): primary = 0.68-inch double-armoured electro-mechanical cable (Hover et al. 1994's cable class),
@@ -54,11 +63,16 @@ class TowEnv(gym.Env):
     reward_weights, reward_fn, slack_tension, over_tension_fraction
         Weights of :class:`~towenv.envs.pieces.HeavePitchReward` or a replacement ``RewardFn``.
     breaking_load, floor_depth
-        Breaking loads (N; float for every line or ``{line: N}``) and the floor depth (m) of the towed
-        body: exceeding either *terminates* the episode. ``None`` disables.
+        Breaking loads (N; float for every line or ``{line: N or None}``) and the floor depth (m) of the towed
+        body: exceeding either *terminates* the episode. ``breaking_load=None`` means
+        :data:`DEFAULT_BREAKING_LOAD` (``{}`` = no limit); ``floor_depth=None`` disables the floor.
     body, sim_overrides, render_mode
         Towed body scored (default ``"fish"``), solver overrides passed to ``Simulator`` (e.g.
         ``{"max_step_cuts": 0}``), ``"rgb_array"`` or ``"human"``.
+
+    Every keyword and every ``reset`` option is checked (:class:`~towenv.envs.checks.ConfigError`, naming it);
+    a malformed action raises :class:`~towenv.envs.checks.ActionError` and ``step`` without a live episode
+    :class:`~towenv.envs.checks.ResetNeeded` (docs/environments.md "Errors and validation").
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
@@ -84,82 +98,164 @@ class TowEnv(gym.Env):
                  fidelity: float | None = None, render_mode: str | None = None,
                  mru_delay: float = 0.0, mean_time_constant: float | None = 30.0):
         super().__init__()
-        if not (isinstance(mru_delay, (int, float)) and math.isfinite(mru_delay) and 0.0 <= mru_delay <= 5.0):
-            raise ValueError(f"mru_delay must be in [0, 5] s (got {mru_delay!r})")
-        if mean_time_constant is not None and not (isinstance(mean_time_constant, (int, float))
-                                                   and math.isfinite(mean_time_constant) and mean_time_constant > 0):
-            raise ValueError(f"mean_time_constant must be > 0 s, or None for deviations about the steady tow "
-                             f"(got {mean_time_constant!r})")
-        self.mru_delay = float(mru_delay)
-        self.mean_time_constant = None if mean_time_constant is None else float(mean_time_constant)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None "
-                             f"(got {render_mode!r})")
-        if not (math.isfinite(control_hz) and control_hz > 0):
-            raise ValueError(f"control_hz must be > 0 (got {control_hz!r})")
-        if dt is not None and not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be > 0 s or None (automatic) (got {dt!r})")
-        if fidelity is not None and not (isinstance(fidelity, (int, float)) and 0 < fidelity < 1):
-            raise ValueError(f"fidelity must be a relative tolerance in (0, 1), e.g. 0.05, or None (got {fidelity!r})")
-        if not (math.isfinite(episode_seconds) and episode_seconds > 0):
-            raise ValueError(f"episode_seconds must be > 0 (got {episode_seconds!r})")
+        own = type(self).__name__
+        # ---- every keyword checked before anything is built (ConfigError naming the keyword)
+        self.mru_delay = C.real(own, "mru_delay", mru_delay, 0.0, 5.0, unit="s")
+        self.mean_time_constant = C.real(own, "mean_time_constant", mean_time_constant, 0.0, lo_open=True, unit="s",
+                                         none="deviations about the steady tow")
+        C.choice(own, "render_mode", render_mode, self.metadata["render_modes"], none="no rendering")
+        control_hz = C.real(own, "control_hz", control_hz, 0.0, lo_open=True, unit="Hz")
+        dt = C.real(own, "dt", dt, 1e-5, 1.0, unit="s", none="the scene's solver.dt or automatic")
+        fidelity = C.real(own, "fidelity", fidelity, 0.0, 1.0, lo_open=True, hi_open=True,
+                          none="the scene's setting")
+        episode_seconds = C.real(own, "episode_seconds", episode_seconds, 0.0, lo_open=True, unit="s")
+        if isinstance(sea_codes, (str, bytes, Mapping)) or not C._iterable(sea_codes) or len(list(sea_codes)) == 0:
+            raise C.ConfigError(f"{own}: sea_codes must be a non-empty sequence of WMO sea-state codes "
+                                f"(integers 0..9) (got {sea_codes!r})")
+        sea_codes = tuple(C.integer(own, "sea_codes entry", c, 0, 9) for c in sea_codes)
+        C.choice(own, "sea_convention", sea_convention, SEA_CONVENTIONS)
+        heading_deg = C.real(own, "heading_deg", heading_deg, unit="deg")
+        heading_spread_deg = C.real(own, "heading_spread_deg", heading_spread_deg, 0.0, 180.0, unit="deg")
+        if sea_generator is not None and not callable(sea_generator):
+            raise C.ConfigError(f"{own}: sea_generator must be callable, gen(rng) -> (SeaState, wave_seed), or None "
+                                f"(RandomCodeSeas over sea_codes) (got {sea_generator!r})")
+        vessel_speeds = C.real_seq(own, "vessel_speeds", vessel_speeds, 0.0, lo_open=True, empty=False, unit="m/s",
+                                   none="the scene's speed")
+        cable_lengths = C.real_seq(own, "cable_lengths", cable_lengths, 0.0, lo_open=True, empty=False, unit="m",
+                                   none="the scene's length")
+        if not isinstance(cable_line, str):
+            raise C.ConfigError(f"{own}: cable_line must be a line name (str) (got {cable_line!r})")
+        if observations is not None and (isinstance(observations, (str, bytes, Mapping))
+                                         or not C._iterable(observations)
+                                         or not all(isinstance(n, str) for n in observations)):
+            raise C.ConfigError(f"{own}: observations must be a sequence of channel names, or None (the defaults) "
+                                f"(got {observations!r}); channels: {sorted(CHANNELS)}")
+        noise = C.mapping(own, "sensor_noise", sensor_noise, none="no noise")
+        for k, v in noise.items():
+            noise[k] = C.real(own, f"sensor_noise[{k!r}]", v, 0.0)
+        obs_delay = C.integer(own, "obs_delay", obs_delay, 0, MAX_OBS_DELAY, whole_floats=True)
+        preview_distances = C.real_seq(own, "preview_distances", preview_distances, unit="m")
+        if observation_fn is not None and not (
+                callable(observation_fn) and callable(getattr(observation_fn, "reset", None))
+                and hasattr(observation_fn, "low") and hasattr(observation_fn, "high")):
+            raise C.ConfigError(f"{own}: observation_fn must be an Observer-like object (callable, with reset(m, rng) "
+                                f"and low/high bound arrays), or None (got {observation_fn!r})")
+        weights = C.mapping(own, "reward_weights", reward_weights, none="the defaults")
+        for k, v in weights.items():
+            if k not in HeavePitchReward.DEFAULTS:
+                raise C.ConfigError(f"{own}: unknown reward weight {k!r} in reward_weights; known: "
+                                    f"{sorted(HeavePitchReward.DEFAULTS)}")
+            weights[k] = C.real(own, f"reward_weights[{k!r}]", v, 0.0)
+        if reward_fn is not None and not callable(reward_fn):
+            raise C.ConfigError(f"{own}: reward_fn must be callable, fn(m, action, prev_action) -> (reward, "
+                                f"components), or None (HeavePitchReward) (got {reward_fn!r})")
+        slack_tension = C.real(own, "slack_tension", slack_tension, 0.0, unit="N")
+        over_tension_fraction = C.real(own, "over_tension_fraction", over_tension_fraction, 0.0, 1.0, hi_open=True)
+        if breaking_load is not None and not isinstance(breaking_load, Mapping):
+            C.real(own, "breaking_load", breaking_load, 0.0, lo_open=True, unit="N")
+        elif breaking_load is not None:
+            for k, v in breaking_load.items():
+                if not isinstance(k, str):
+                    raise C.ConfigError(f"{own}: breaking_load keys must be line names (got {k!r})")
+                C.real(own, f"breaking_load[{k!r}]", v, 0.0, lo_open=True, unit="N", none="no limit for that line")
+        floor_depth = C.real(own, "floor_depth", floor_depth, 0.0, lo_open=True, unit="m", none="no floor")
+        if not isinstance(body, str):
+            raise C.ConfigError(f"{own}: body must be a body name (str) (got {body!r})")
+        sim_overrides = C.mapping(own, "sim_overrides", sim_overrides, none="the scene's solver settings")
+        scene_overrides = C.mapping(own, "scene_overrides", scene_overrides, none="no overrides")
+
         self.render_mode = render_mode
         self.control_hz = float(control_hz)
 
-        self.sea_codes = tuple(int(c) for c in sea_codes)
+        self.sea_codes = sea_codes
         self.sea_convention = sea_convention
         self.sea_generator = sea_generator if sea_generator is not None else RandomCodeSeas(
             self.sea_codes, sea_convention, heading_deg, heading_spread_deg)
-        self.vessel_speeds = None if vessel_speeds is None else tuple(float(v) for v in vessel_speeds)
-        self.cable_lengths = None if cable_lengths is None else tuple(float(v) for v in cable_lengths)
-        for nm, vals in (("vessel_speeds", self.vessel_speeds), ("cable_lengths", self.cable_lengths)):
-            if vals is not None and (len(vals) == 0 or not all(math.isfinite(v) and v > 0 for v in vals)):
-                raise ValueError(f"{nm} must be a non-empty sequence of positive numbers (got {vals!r})")
+        self.vessel_speeds = vessel_speeds
+        self.cable_lengths = cable_lengths
         self.cable_line = cable_line
         self.body = body
-        self.floor_depth = None if floor_depth is None else float(floor_depth)
+        self.floor_depth = floor_depth
         if breaking_load is None:
             breaking_load = DEFAULT_BREAKING_LOAD
         self.breaking_load = breaking_load
-        self.sim_overrides = dict(sim_overrides or {})
+        self.sim_overrides = sim_overrides
 
         self.reward_fn = reward_fn if reward_fn is not None else HeavePitchReward(
-            reward_weights, slack_tension=slack_tension, over_tension_fraction=over_tension_fraction)
-        self.observer = observation_fn if observation_fn is not None else Observer(
-            observations if observations is not None else self.DEFAULT_OBSERVATIONS, sensor_noise, obs_delay,
-            action_dim=self.ACTION_DIM, preview_distances=preview_distances)
+            weights or None, slack_tension=slack_tension, over_tension_fraction=over_tension_fraction)
+        try:
+            self.observer = observation_fn if observation_fn is not None else Observer(
+                observations if observations is not None else self.DEFAULT_OBSERVATIONS, noise or None, obs_delay,
+                action_dim=self.ACTION_DIM, preview_distances=preview_distances)
+        except C.ConfigError:
+            raise
+        except ValueError as exc:
+            raise C.ConfigError(f"{own}: observations / sensor_noise / preview_distances: {exc}") from None
 
         from ..scene import load_scene
-        base = load_scene(scene if scene is not None else self.DEFAULT_SCENE)
+        try:
+            base = load_scene(scene if scene is not None else self.DEFAULT_SCENE)
+        except (ValueError, TypeError, OSError) as exc:
+            raise C.ConfigError(f"{own}: scene {scene!r}: {exc}") from exc
         if scene_overrides:
-            base = base.with_overrides(dict(scene_overrides))
-        self.base_scene = self._prepare_scene(base)
+            try:
+                base = base.with_overrides(scene_overrides)
+            except (ValueError, TypeError) as exc:
+                raise C.ConfigError(f"{own}: scene_overrides: {exc}") from exc
+        try:
+            self.base_scene = self._prepare_scene(base)
+        except C.ConfigError:
+            raise
+        except ValueError as exc:
+            raise C.ConfigError(f"{own}: scene: {exc}") from exc
+        lines = [ln.name for ln in self.base_scene.lines]
+        if isinstance(breaking_load, Mapping):
+            unknown = [k for k in breaking_load if k not in lines]
+            if unknown:
+                raise C.ConfigError(f"{own}: breaking_load names line(s) {unknown} that scene "
+                                    f"{self.base_scene.name!r} does not have (lines: {lines})")
         self.fidelity = None
         dt = self._resolve_time_step(dt, fidelity, heading_deg,
                                      planar_ok=heading_spread_deg == 0 and sea_generator is None)
         self.physics_dt = float(dt)
-        self.substeps = max(1, int(round(1.0 / (control_hz * dt))))
+        ratio = 1.0 / (control_hz * dt)
+        if not ratio < BT.BLOCK + 0.5:
+            raise C.ConfigError(f"{own}: control_hz and dt must give at most {BT.BLOCK} physics steps per control step "
+                                f"(1/(control_hz·dt) = 1/({control_hz:g} Hz · {dt:g} s) = {ratio:g})")
+        self.substeps = max(1, int(round(ratio)))
         if abs(self.substeps * dt * control_hz - 1.0) > 1e-6:
             warnings.warn(f"TowEnv: 1/(control_hz·dt) = {1.0 / (control_hz * dt):g} is not a whole number; "
                           f"using {self.substeps} physics steps per control step (control period "
                           f"{self.substeps * dt:g} s)", stacklevel=2)
         self.dt = self.substeps * self.physics_dt           # control period (MuJoCo frame_skip convention)
         if round(self.mru_delay / self.physics_dt) > BT.BLOCK // 2:
-            raise ValueError(f"mru_delay must be at most {BT.BLOCK // 2} physics steps "
-                             f"({BT.BLOCK // 2 * self.physics_dt:g} s at dt = {self.physics_dt:g} s; got {self.mru_delay!r})")
+            raise C.ConfigError(f"{own}: mru_delay must be at most {BT.BLOCK // 2} physics steps "
+                                f"({BT.BLOCK // 2 * self.physics_dt:g} s at dt = {self.physics_dt:g} s; "
+                                f"got {self.mru_delay!r})")
         self.episode_seconds = float(episode_seconds)
         self.max_steps = max(1, int(round(episode_seconds / self.dt)))
         self.metadata = dict(self.metadata, render_fps=max(1, int(round(1.0 / self.dt))))
-        if cable_lengths is not None and cable_line not in [ln.name for ln in self.base_scene.lines]:
-            raise ValueError(f"cable_line {cable_line!r} is not a line of scene {self.base_scene.name!r} "
-                             f"(lines: {[ln.name for ln in self.base_scene.lines]})")
+        if cable_lengths is not None and cable_line not in lines:
+            raise C.ConfigError(f"{own}: cable_line {cable_line!r} is not a line of scene {self.base_scene.name!r} "
+                                f"(lines: {lines})")
+        # every configuration of the sets must make a valid scene (the simulators are built lazily)
+        for v in vessel_speeds or ():
+            self._checked_config_scene(v, None, "vessel_speeds")
+        for v in cable_lengths or ():
+            self._checked_config_scene(None, v, "cable_lengths")
         self._sims: dict[tuple, Any] = {}
         self._config = (None, None)
-        self.sim = self._get_sim(None, None)           # the default configuration, built eagerly
+        try:
+            self.sim = self._get_sim(None, None)           # the default configuration, built eagerly
+        except C.ConfigError:
+            raise
+        except (ValueError, TypeError) as exc:
+            raise C.ConfigError(f"{own}: the simulator cannot be built from scene / scene_overrides / "
+                                f"sim_overrides: {exc}") from exc
         try:
             self.sim.body_state(self.body)
         except KeyError as exc:
-            raise ValueError(f"body {body!r}: {exc.args[0]}") from None
+            raise C.ConfigError(f"{own}: body {body!r}: {exc.args[0]}") from None
         self._check_actuator(self.sim)
 
         self._wants_preview = bool(getattr(self.observer, "wants_preview", False))
@@ -171,6 +267,8 @@ class TowEnv(gym.Env):
         self._rows = EnvRows(1, self.ACTION_DIM)       # the vector env re-points this at its shared rows
         self._rows.envs[0] = self
         self._row = 0
+        self._act_shape = (self.ACTION_DIM,)
+        self._needs_reset = "before"                    # step() raises ResetNeeded until reset()
         self._install_row()
 
     def _install_row(self) -> None:
@@ -268,8 +366,8 @@ class TowEnv(gym.Env):
     def _commands(self, A: np.ndarray, rows: np.ndarray, U: np.ndarray, amap: np.ndarray) -> None:
         """Write the actuator commands of clipped actions ``A[rows]`` into ``U[rows]`` (vectorised;
         ``amap[rows]`` holds each copy's action-map parameters). Must first clean ``A[rows]`` in place:
-        NaN -> 0, clip to [-1, 1]."""
-        _clean_actions(A, rows)
+        NaN -> 0, clip to [-1, 1] — and return the number of entries that changed (0 if none)."""
+        return _clean_actions(A, rows)
 
     def _reset_action(self) -> np.ndarray:
         """The action equivalent of the actuator's state after reset (reported as ``last_action``)."""
@@ -280,6 +378,17 @@ class TowEnv(gym.Env):
         its row of action-map parameters used by :meth:`_commands`)."""
 
     # ------------------------------------------------------------------ configuration
+    def _checked_config_scene(self, speed, length, what):
+        """``_config_scene(speed, length)``, with a scene error re-raised as a ConfigError naming ``what``."""
+        try:
+            return self._config_scene(speed, length)
+        except C.ConfigError:
+            raise
+        except (ValueError, TypeError, KeyError) as exc:
+            val = speed if length is None else length
+            raise C.ConfigError(f"{type(self).__name__}: {what} = {val!r} does not give a valid scene: "
+                                f"{exc}") from exc
+
     def _get_sim(self, speed, length):
         key = (speed, length)
         sim = self._sims.get(key)
@@ -297,9 +406,13 @@ class TowEnv(gym.Env):
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        options = self._check_options(options)          # before anything changes (ConfigError)
+        if seed is not None:                            # numpy integers too (gymnasium wants a Python int)
+            seed = C.integer(type(self).__name__, "reset seed", seed, 0)
         super().reset(seed=seed)
-        options = dict(options or {})
+        self._needs_reset = "failed"                    # until this reset has completed
         rng = self.np_random
+        own = type(self).__name__
         speed = options.get("vessel_speed")
         if speed is None and self.vessel_speeds is not None:
             speed = self.vessel_speeds[int(rng.integers(len(self.vessel_speeds)))]
@@ -309,12 +422,27 @@ class TowEnv(gym.Env):
         if "sea_state" in options:
             sea, wseed = options["sea_state"], int(options.get("sea_seed", 0))
         elif "eval_index" in options:
-            ev = self.eval_sea_states()
-            sea, wseed = ev[int(options["eval_index"]) % len(ev)]
+            sea, wseed = self.eval_sea_states()[options["eval_index"]]
         else:
-            sea, wseed = self.sea_generator(rng)
+            drawn = self.sea_generator(rng)
+            if not (isinstance(drawn, tuple) and len(drawn) == 2 and isinstance(drawn[0], SeaState)
+                    and isinstance(drawn[1], numbers.Integral) and not isinstance(drawn[1], (bool, np.bool_))
+                    and int(drawn[1]) >= 0):
+                raise C.ConfigError(f"{own}: sea_generator must return (SeaState, wave_seed >= 0) "
+                                    f"(got {drawn!r})")
+            sea, wseed = drawn
+        if (speed, length) in self._sims:
+            sim = self._sims[(speed, length)]
+        else:
+            what = " / ".join(n for n, v in (("vessel_speed", speed), ("cable_length", length)) if v is not None)
+            self._checked_config_scene(speed, length, what)
+            try:
+                sim = self._get_sim(speed, length)
+            except (ValueError, TypeError, KeyError) as exc:
+                raise C.ConfigError(f"{own}: {what} = {(speed, length)!r}: the simulator cannot be built: "
+                                    f"{exc}") from exc
         self._config = (speed, length)
-        sim = self.sim = self._get_sim(speed, length)
+        self.sim = sim
         sim.set_sea(sea, int(wseed))
         sim.reset()
         self._sea = (sea, int(wseed))
@@ -323,9 +451,48 @@ class TowEnv(gym.Env):
                 "sea_seed": int(wseed), "vessel_speed": float(sim.path.initial_speed), "t": 0.0}
         if self.cable_line in self._line_names(sim):
             info["cable_length"] = float(sim.scene.line(self.cable_line).length)
+        self._needs_reset = False
         if self.render_mode == "human":
             self.render()
         return obs, info
+
+    def _check_options(self, options) -> dict:
+        """The ``reset`` options as a dict, every key and value checked (:data:`RESET_OPTIONS`)."""
+        own = type(self).__name__
+        if options is None:
+            return {}
+        if not isinstance(options, Mapping):
+            raise C.ConfigError(f"{own}: reset options must be a dict or None (got {options!r}); "
+                                f"keys: {list(RESET_OPTIONS)}")
+        options = dict(options)
+        unknown = [k for k in options if k not in RESET_OPTIONS]
+        if unknown:
+            raise C.ConfigError(f"{own}: unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
+        if "eval_index" in options:
+            if "sea_state" in options:
+                raise C.ConfigError(f"{own}: reset options eval_index and sea_state exclude each other "
+                                    f"(got both)")
+            n = len(self.eval_sea_states())
+            options["eval_index"] = C.integer(own, "reset option eval_index", options["eval_index"], 0, n - 1)
+        if "sea_state" in options and not isinstance(options["sea_state"], SeaState):
+            raise C.ConfigError(f"{own}: reset option sea_state must be a towenv.sea.SeaState, e.g. "
+                                f"SeaState.from_code(4, 'coastal') (got {options['sea_state']!r})")
+        if "sea_seed" in options:
+            if "sea_state" not in options:
+                raise C.ConfigError(f"{own}: reset option sea_seed needs sea_state (the seed of that sea's wave "
+                                    f"realisation); got sea_seed without sea_state")
+            options["sea_seed"] = C.integer(own, "reset option sea_seed", options["sea_seed"], 0)
+        if options.get("vessel_speed") is not None:
+            options["vessel_speed"] = C.real(own, "reset option vessel_speed", options["vessel_speed"], 0.0,
+                                             lo_open=True, unit="m/s")
+        if options.get("cable_length") is not None:
+            options["cable_length"] = C.real(own, "reset option cable_length", options["cable_length"], 0.0,
+                                             lo_open=True, unit="m")
+            lines = [ln.name for ln in self.base_scene.lines]
+            if self.cable_line not in lines:
+                raise C.ConfigError(f"{own}: reset option cable_length needs cable_line {self.cable_line!r} to be "
+                                    f"a line of scene {self.base_scene.name!r} (lines: {lines})")
+        return options
 
     def _start_episode(self, sim, rng) -> np.ndarray:
         """Install ``sim`` (just reset) in this env's row of the batch stepper, set the row's reference
@@ -355,18 +522,37 @@ class TowEnv(gym.Env):
         return obs_fn.reset(self._row_dict(M, rows.prev_action[i], P[0] if P is not None else None), rng)
 
     def step(self, action):
-        a = np.array(action, dtype=float).reshape(1, self.ACTION_DIM)   # a copy: the caller's array is kept
+        if self._needs_reset:
+            raise C.ResetNeeded(self._reset_needed_text())
+        # fast path: a float array of the action shape (what policies and action_space.sample() give)
+        if not (type(action) is np.ndarray and action.shape == self._act_shape and action.dtype.kind == "f"):
+            action = C.action_array(action, self._act_shape, self._action_space_text,
+                                    f"{type(self).__name__}.step: action", also=((),) if self.ACTION_DIM == 1 else ())
         rows = self._rows
         i = self._row
-        A = rows.actions
-        A[i] = a[0]
+        rows.actions[i] = action                        # a copy (float64): the caller's array is kept
         res = step_copies([self], rows, np.array([i]))
         obs, reward, terminated, truncated = res.obs[0], float(res.rewards[0]), bool(res.terminated[0]), \
             bool(res.truncated[0])
         info = res.info(0)
+        if terminated or truncated:
+            self._needs_reset = "ended"
         if self.render_mode == "human":
             self.render()
         return obs, reward, terminated, truncated, info
+
+    def _reset_needed_text(self) -> str:
+        own = type(self).__name__
+        if self._needs_reset == "ended":
+            return (f"{own}.step called after the episode ended (terminated or truncated at t = "
+                    f"{float(self._rows.stepper.M[self._row, BT.M_T]):g} s): call reset() to start a new episode")
+        if self._needs_reset == "failed":
+            return f"{own}.step called after a reset() that raised: call reset() again"
+        return f"{own}.step called before reset(): call reset() first"
+
+    def _action_space_text(self) -> str:
+        return (f"{self.action_space!r} (shape {self.action_space.shape}, real numbers; values outside "
+                f"[-1, 1] are clipped and NaN is read as 0)")
 
     # ------------------------------------------------------------------ measurement
     def _slack(self):
@@ -475,6 +661,8 @@ class TowEnv(gym.Env):
         return st
 
     def __setstate__(self, st):
+        st.setdefault("_needs_reset", False)     # pickles of earlier versions
+        st.setdefault("_act_shape", (type(self).ACTION_DIM,))
         self.__dict__.update(st)
 
     # ------------------------------------------------------------------ convenience
@@ -502,6 +690,7 @@ class EnvRows:
         self.prev_action = np.zeros((n, action_dim))
         self.amap = np.zeros((n, 8))
         self.preview = None
+        self.action_warned = False          # the clipping / NaN warning has been shown (once per env)
         self.envs: list = [None] * n
         self._all = np.ones(n, bool)
 
@@ -544,7 +733,8 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
     e0 = envs[0]
     st = rows.stepper
     A = rows.actions
-    e0._commands(A, idx, st.U, rows.amap)          # also cleans A[idx] (NaN -> 0, clip to [-1, 1])
+    if e0._commands(A, idx, st.U, rows.amap):      # also cleans A[idx] (NaN -> 0, clip to [-1, 1])
+        _warn_cleaned(e0, rows)
     refs = st.refs                                  # the kernel adds 1 to refs[idx, R_STEPS]
     if len(idx) == st.num_copies:
         act = None
@@ -622,7 +812,18 @@ def _post_rows(M, refs, A, PA, idx, floor, has_floor, R, term, trunc):
 
 def _clean_actions(A, idx):
     a = A[idx]
-    if not np.isfinite(a).all():
+    bad = int(np.count_nonzero(~((a >= -1.0) & (a <= 1.0))))     # NaN, ±inf and |a| > 1
+    if bad:
         a = np.nan_to_num(a, nan=0.0)
-    np.minimum(np.maximum(a, -1.0, out=a), 1.0, out=a)
-    A[idx] = a
+        np.minimum(np.maximum(a, -1.0, out=a), 1.0, out=a)
+        A[idx] = a
+    return bad
+
+
+def _warn_cleaned(env, rows) -> None:
+    """Warn once per environment (per vector environment) that actions were clipped / NaN read as 0."""
+    if getattr(rows, "action_warned", False):
+        return
+    rows.action_warned = True
+    warnings.warn(f"{type(env).__name__}: action values outside {env.action_space!r} were clipped to [-1, 1] "
+                  f"(NaN read as 0), as documented; this warning is shown once per environment", stacklevel=4)

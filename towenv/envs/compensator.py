@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from ..core import batch as BT
+from . import checks as C
 from .base import TowEnv
 
 __all__ = ["CompensatorGainsEnv", "COMPENSATOR_CLASSES"]
@@ -53,12 +54,14 @@ class CompensatorGainsEnv(TowEnv):
 
     def __init__(self, *, compensator_class: str | None = None, stiffness_floor: float | None = None,
                  damping_floor: float | None = None, **kwargs):
-        if compensator_class is not None and compensator_class not in COMPENSATOR_CLASSES:
-            raise ValueError(f"CompensatorGainsEnv: compensator_class must be one of {sorted(COMPENSATOR_CLASSES)} "
-                             f"or None (got {compensator_class!r})")
+        own = type(self).__name__
+        C.choice(own, "compensator_class", compensator_class, sorted(COMPENSATOR_CLASSES),
+                 none="the scene's stroke and mass")
         self.compensator_class = compensator_class
-        self.stiffness_floor = stiffness_floor
-        self.damping_floor = damping_floor
+        self.stiffness_floor = C.real(own, "stiffness_floor", stiffness_floor, 0.0, lo_open=True, unit="N/m",
+                                      none="1e-3 × the upper bound")
+        self.damping_floor = C.real(own, "damping_floor", damping_floor, 0.0, lo_open=True, unit="N s/m",
+                                    none="1e-3 × the upper bound")
         super().__init__(**kwargs)
 
     # ------------------------------------------------------------------ hooks
@@ -79,7 +82,7 @@ class CompensatorGainsEnv(TowEnv):
             raise ValueError(f"CompensatorGainsEnv: the {what} upper bound must be > 0 (got {bounds})")
         f = 1e-3 * hi if floor is None else float(floor)
         if not (math.isfinite(f) and 0 < f <= hi):
-            raise ValueError(f"CompensatorGainsEnv: {what}_floor must be in (0, {hi:g}] (got {floor!r})")
+            raise C.ConfigError(f"CompensatorGainsEnv: {what}_floor must be in (0, {hi:g}] (got {floor!r})")
         lo_eff = lo if lo > 0 else f
         return lo_eff, hi, lo, hi
 
@@ -118,7 +121,7 @@ class CompensatorGainsEnv(TowEnv):
         return int(self._rows.stepper.refs[self._row, BT.R_HITS])
 
     def _commands(self, A, rows, U, amap):
-        _log_gains(A, rows, amap, U)
+        return _log_gains(A, rows, amap, U)
 
     def _actuator_refs(self, ref, amap):
         self._check_actuator(self.sim)          # bounds are per configuration (same for all by default)
@@ -135,14 +138,17 @@ class CompensatorGainsEnv(TowEnv):
 @njit(cache=True)
 def _log_gains(A, rows, amap, U):
     """Clean actions ``A[rows]`` in place (NaN → 0, clip to [−1, 1]) and map them to gains (the
-    arithmetic of :meth:`CompensatorGainsEnv.gains`)."""
+    arithmetic of :meth:`CompensatorGainsEnv.gains`). Returns the number of action entries cleaned."""
+    n_bad = 0
     for k in range(rows.shape[0]):
         b = rows[k]
         for d in range(2):
             a = A[b, d]
-            if a != a:                      # NaN -> 0; ±inf -> ±1
-                a = 0.0
-            a = min(max(a, -1.0), 1.0)
+            if not (-1.0 <= a <= 1.0):      # NaN -> 0; ±inf, |a| > 1 -> ±1
+                n_bad += 1
+                if a != a:
+                    a = 0.0
+                a = min(max(a, -1.0), 1.0)
             A[b, d] = a
             lo = amap[b, 4 * d]
             hi = amap[b, 4 * d + 1]
@@ -153,3 +159,4 @@ def _log_gains(A, rows, amap, U):
             else:
                 g = lo * (hi / lo) ** (0.5 * (a + 1.0))
             U[b, d] = min(max(g, blo), bhi)
+    return n_bad

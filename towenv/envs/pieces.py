@@ -156,7 +156,8 @@ class Observer:
             raise ValueError(f"sensor noise given for channel(s) not observed: {bad}")
         if any(not (math.isfinite(float(s)) and float(s) >= 0) for s in noise.values()):
             raise ValueError(f"sensor noise std must be finite and >= 0 (got {noise})")
-        if int(delay) != delay or delay < 0:
+        if (isinstance(delay, bool) or not isinstance(delay, (int, float, np.integer, np.floating))
+                or not math.isfinite(delay) or int(delay) != delay or delay < 0):
             raise ValueError(f"observation delay must be a whole number of control steps >= 0 (got {delay!r})")
         if "wave_preview" in names and len(preview_distances) == 0:
             raise ValueError("the wave_preview channel needs preview_distances (m ahead of the tow point)")
@@ -425,10 +426,11 @@ class HeavePitchReward(RewardFn):
         for k, v in (weights or {}).items():
             if k not in w:
                 raise ValueError(f"unknown reward weight {k!r}; known: {sorted(w)}")
-            if not (isinstance(v, (int, float)) and math.isfinite(float(v)) and float(v) >= 0):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(float(v)) and float(v) >= 0):
                 raise ValueError(f"reward weight {k!r} must be finite and >= 0 (got {v!r})")
             w[k] = float(v)
-        if not 0.0 <= over_tension_fraction < 1.0:
+        if isinstance(over_tension_fraction, bool) or not (
+                isinstance(over_tension_fraction, (int, float)) and 0.0 <= over_tension_fraction < 1.0):
             raise ValueError(f"over_tension_fraction must be in [0, 1) (got {over_tension_fraction!r})")
         self.weights = w
         self.slack_tension = float(slack_tension)

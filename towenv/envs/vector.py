@@ -32,6 +32,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..core import batch as BT
+from . import checks as C
 from .base import EnvRows, step_copies
 from .compensator import CompensatorGainsEnv
 from .winch import WinchPayoutEnv
@@ -53,14 +54,20 @@ class TowVectorEnv(VectorEnv):
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP, render_mode: str | None = None,
                  batch_infos: bool = True, parallel: bool = False, **env_kwargs: Any):
         cls = env_class or self.env_class
+        own = type(self).__name__
         if cls is None:
-            raise ValueError("TowVectorEnv: give env_class (or use a subclass)")
-        if int(num_envs) < 1:
-            raise ValueError(f"num_envs must be >= 1 (got {num_envs!r})")
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"vector environments render only 'rgb_array' (got {render_mode!r})")
+            raise C.ConfigError(f"{own}: give env_class (or use a subclass)")
+        n = C.integer(own, "num_envs", num_envs, 1)
+        C.choice(own, "render_mode", render_mode, ["rgb_array"], none="no rendering")
+        modes = [m.value for m in AutoresetMode]
+        if not (isinstance(autoreset_mode, AutoresetMode) or autoreset_mode in modes):
+            raise C.ConfigError(f"{own}: autoreset_mode must be an AutoresetMode or one of {modes} "
+                                f"(got {autoreset_mode!r})")
+        for nm, v in (("batch_infos", batch_infos), ("parallel", parallel)):
+            if not isinstance(v, (bool, np.bool_)):
+                raise C.ConfigError(f"{own}: {nm} must be True or False (got {v!r})")
         self.autoreset_mode = AutoresetMode(autoreset_mode)
-        self.num_envs = n = int(num_envs)
+        self.num_envs = n
         self.envs = [cls(render_mode=render_mode, **env_kwargs) for _ in range(n)]
         e0 = self.envs[0]
         for e in self.envs[1:]:
@@ -88,6 +95,7 @@ class TowVectorEnv(VectorEnv):
         self._autoreset = np.zeros(n, bool)
         self._started = np.zeros(n, bool)
         self._all = np.arange(n)
+        self._act_shape = (n,) + tuple(self.single_action_space.shape)
 
     # ------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
@@ -123,16 +131,20 @@ class TowVectorEnv(VectorEnv):
         auto-reset before stepping (NEXT_STEP), {row: (final obs, final info)} of copies auto-reset after
         (SAME_STEP)). Fills ``self._obs/_rew/_term/_trunc``."""
         n = self.num_envs
-        adim = self.single_action_space.shape
-        actions = np.asarray(actions, dtype=np.float32).reshape((n,) + adim)
+        shape = self._act_shape
+        if not (type(actions) is np.ndarray and actions.shape == shape and actions.dtype.kind == "f"):
+            actions = C.action_array(actions, shape, self._action_space_text, f"{type(self).__name__}.step: actions",
+                                     also=((n,),) if shape[1] == 1 else ())
+        actions = np.asarray(actions, dtype=np.float32)     # as before: the batched actions are float32
         if not self._started.all():
-            raise RuntimeError(f"step: reset copies {np.flatnonzero(~self._started).tolist()} first (call reset())")
+            raise C.ResetNeeded(f"{type(self).__name__}.step: reset copies {np.flatnonzero(~self._started).tolist()} "
+                                f"first (call reset())")
         mode = self.autoreset_mode
         reset_before = {}
         if self._autoreset.any():
             if mode == AutoresetMode.DISABLED:
                 i = int(np.flatnonzero(self._autoreset)[0])
-                raise RuntimeError(f"sub-environment {i} finished: reset it with options={{'reset_mask': ...}}")
+                raise C.ResetNeeded(f"sub-environment {i} finished: reset it with options={{'reset_mask': ...}}")
             if mode == AutoresetMode.NEXT_STEP:
                 for i in np.flatnonzero(self._autoreset):
                     self._obs[i], reset_before[int(i)] = self.envs[i].reset()
@@ -158,6 +170,12 @@ class TowVectorEnv(VectorEnv):
         else:
             self._autoreset = self._term | self._trunc
         return res, idx, reset_before, final
+
+    def _action_space_text(self) -> str:
+        one = self.single_action_space.shape == (1,)
+        return (f"{self.action_space!r} (num_envs = {self.num_envs} rows of the single action space "
+                f"{self.single_action_space!r}{'; shape (num_envs,) is accepted too' if one else ''}; real numbers, "
+                f"values outside [-1, 1] are clipped and NaN is read as 0)")
 
     def step(self, actions):
         res, idx, reset_before, final = self._step_arrays(actions)

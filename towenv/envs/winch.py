@@ -25,6 +25,7 @@ import math
 from numba import njit
 
 from ..core import batch as BT
+from . import checks as C
 from .base import TowEnv
 
 __all__ = ["WinchPayoutEnv", "WINCH_CLASSES"]
@@ -56,18 +57,20 @@ class WinchPayoutEnv(TowEnv):
 
     def __init__(self, *, winch_class: str = "standard", winch_max_speed: float | None = None,
                  winch_max_acceleration: float | None = None, winch_travel: float | None = None, **kwargs):
-        if winch_class not in WINCH_CLASSES:
-            raise ValueError(f"WinchPayoutEnv: winch_class must be one of {sorted(WINCH_CLASSES)} (got {winch_class!r})")
+        own = type(self).__name__
+        C.choice(own, "winch_class", winch_class, sorted(WINCH_CLASSES))
         cls = WINCH_CLASSES[winch_class]
         self.winch_class = winch_class
         self.winch_rated_power = float(cls["rated_power"])
+        winch_max_speed = C.real(own, "winch_max_speed", winch_max_speed, 0.0, lo_open=True, unit="m/s",
+                                 none="the class's value")
+        winch_max_acceleration = C.real(own, "winch_max_acceleration", winch_max_acceleration, 0.0, lo_open=True,
+                                        unit="m/s²", none="the class's value")
+        winch_travel = C.real(own, "winch_travel", winch_travel, 0.0, lo_open=True, unit="m",
+                              none="the class's value")
         winch_max_speed = cls["max_speed"] if winch_max_speed is None else winch_max_speed
         winch_max_acceleration = cls["max_acceleration"] if winch_max_acceleration is None else winch_max_acceleration
         winch_travel = cls["travel"] if winch_travel is None else winch_travel
-        for nm, v in (("winch_max_speed", winch_max_speed), ("winch_max_acceleration", winch_max_acceleration),
-                      ("winch_travel", winch_travel)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"WinchPayoutEnv: {nm} must be > 0 (got {v!r})")
         self.winch_max_speed = float(winch_max_speed)
         self.winch_max_acceleration = float(winch_max_acceleration)
         self.winch_travel = float(winch_travel)
@@ -89,8 +92,13 @@ class WinchPayoutEnv(TowEnv):
     def _config_scene(self, speed, length):
         sc = super()._config_scene(speed, length)
         L = self._winch_line(sc).length
-        return sc.with_overrides({"winch.min_length": max(L - self.winch_travel, 1e-3),
-                                  "winch.max_length": L + self.winch_travel})
+        try:
+            return sc.with_overrides({"winch.min_length": max(L - self.winch_travel, 1e-3),
+                                      "winch.max_length": L + self.winch_travel})
+        except ValueError as exc:
+            raise C.ConfigError(f"{type(self).__name__}: the payout window winch_travel = ±{self.winch_travel:g} m "
+                                f"about the {L:g} m winch line{'' if length is None else ' (cable_length)'} does "
+                                f"not fit the scene: {exc}") from exc
 
     def _check_actuator(self, sim):
         sim.winch_state()                      # raises ValueError without a winch
@@ -101,7 +109,7 @@ class WinchPayoutEnv(TowEnv):
         return float(self._rows.stepper.refs[self._row, BT.R_L0])
 
     def _commands(self, A, rows, U, amap):
-        _speed_commands(A, rows, self.winch_max_speed, U)
+        return _speed_commands(A, rows, self.winch_max_speed, U)
 
     def _actuator_refs(self, ref, amap):
         ref[BT.R_VMAX] = self.winch_max_speed
@@ -111,12 +119,17 @@ class WinchPayoutEnv(TowEnv):
 
 @njit(cache=True)
 def _speed_commands(A, rows, vmax, U):
-    """Clean actions ``A[rows]`` in place (NaN → 0, clip to [−1, 1]); payout speed command a·max_speed."""
+    """Clean actions ``A[rows]`` in place (NaN → 0, clip to [−1, 1]); payout speed command a·max_speed.
+    Returns the number of actions that were cleaned."""
+    n_bad = 0
     for k in range(rows.shape[0]):
         b = rows[k]
         a = A[b, 0]
-        if a != a:
-            a = 0.0
-        a = min(max(a, -1.0), 1.0)
+        if not (-1.0 <= a <= 1.0):              # NaN, ±inf, |a| > 1
+            n_bad += 1
+            if a != a:
+                a = 0.0
+            a = min(max(a, -1.0), 1.0)
         A[b, 0] = a
         U[b, 0] = min(max(a * vmax, -vmax), vmax)
+    return n_bad
