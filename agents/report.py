@@ -63,6 +63,10 @@ def format_goal_group(goal: dict, v) -> str:
     return f"{v[0]:.3f}×" if goal.get("ratio") else f"{100 * v[0]:.1f} %"
 
 
+_COLORS = ["#d62728", "#9467bd", "#1f77b4", "#ff7f0e", "#2ca02c", "#8c564b", "#e377c2", "#7f7f7f", "#17becf",
+           "#bcbd22"]
+
+
 def _ci(t, digits=3, pct=False):
     m, lo, hi = t
     if m is None or not math.isfinite(m):
