@@ -21,7 +21,7 @@ Examples::
         --max-minutes 30 --export agents/trained/sac_CompensatorGains-v0.zip
     python scripts/train.py --algo ppo --env towenv/WinchPayout-v0 --resume      # continue the run
     python scripts/train.py --algo ppo --env towenv/WinchPayout-v0 --n-timesteps 4096 \\
-        --env-kwargs episode_seconds:30 --eval-freq 0                              # smoke run (~1 min)
+        --env-kwargs episode_seconds:30 --eval-freq 0                              # smoke run (~10 s)
 
 How long: the YAML recipes (agents/hyperparams/ppo.yml) train 6 M steps on WinchPayout and 4 M on
 CompensatorGains, ~35 and ~25-30 min per seed on one core of the project's 2-core machine (2300-3400

@@ -215,6 +215,8 @@ def test_bad_durations_are_one_line_errors(tmp_path, capsys, duration):
                           "--no-plots"])
     err = [ln for ln in capsys.readouterr().err.splitlines() if "error" in ln]
     assert code == 2 and len(err) == 1 and "duration" in err[0]
+    if duration in ("inf", "nan"):
+        assert "finite" in err[0]               # not the misleading "must be > 0"
     assert not (tmp_path / "o" / "result.npz").exists()
 
 
