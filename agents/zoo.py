@@ -41,9 +41,9 @@ __all__ = ["ALGOS", "load_hyperparams", "linear_schedule", "parse_normalize", "a
            "save_policy_zip", "read_meta", "load_policy", "SB3Policy", "parse_env_kwargs", "HYPERPARAMS_DIR",
            "TRAINED_DIR"]
 
-REPO = Path(__file__).resolve().parent.parent
-HYPERPARAMS_DIR = REPO / "agents" / "hyperparams"
-TRAINED_DIR = REPO / "agents" / "trained"
+# package data (installed with the package: pip install ".[rl]")
+HYPERPARAMS_DIR = Path(__file__).resolve().parent / "hyperparams"
+TRAINED_DIR = Path(__file__).resolve().parent / "trained"
 
 #: keys of the zoo's YAML that are not algorithm constructor keywords
 ZOO_KEYS = ("n_envs", "n_timesteps", "policy", "normalize", "env_wrapper", "env_kwargs", "frame_stack",

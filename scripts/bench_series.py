@@ -12,10 +12,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "scripts"))
 
-from fidelity_check import sea  # noqa: E402
+from towenv.verification.fidelity_cases import sea  # noqa: E402
 from towenv.core.run import simulate  # noqa: E402
 from towenv.core.simulator import Simulator, load  # noqa: E402
 

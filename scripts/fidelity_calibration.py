@@ -34,10 +34,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "scripts"))
 
-from fidelity_check import CASES, fish_name, fish_stats  # noqa: E402
+from towenv.verification.fidelity_cases import CASES, fish_name, fish_stats  # noqa: E402
 from towenv import fidelity as F  # noqa: E402
 from towenv.core.run import simulate  # noqa: E402
 from towenv.core.simulator import Simulator, load  # noqa: E402

@@ -1011,10 +1011,10 @@ def verdict(runs, title="Is towenv's default solver ahead of MoorDyn at equal ac
 
 def steady_ode_tension(scene):
     """V7 steady-tow ODE top tension for a single-line + point-body scene (verification.md)."""
-    from towenv.peer.moordyn_runner import _deck
+    from towenv.peer.moordyn_runner import deck_parameters
     from towenv.verification.closed_forms import steady_tow_ode
     sc = towenv.load_scene(scene)
-    d = _deck(sc)
+    d = deck_parameters(sc)
     w = (d.mu - d.rho * math.pi * d.diameter ** 2 / 4) * d.g
     b = d.body
     sol = steady_tow_ode(d.length, float(sc.vessel.speed), w, d.EA, D=d.diameter, Cn=d.cn, Ct_dl=d.ct, rho=d.rho,

@@ -42,9 +42,6 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 
 def parse_args(argv=None):
@@ -145,9 +142,7 @@ def grid(args) -> list[dict]:
 
 def run_trial(cfg: dict, args) -> dict:
     """Run one trial (train.py's main in this process); return its best validation reward and policy path."""
-    spec = importlib.util.spec_from_file_location("towenv_train", REPO / "scripts" / "train.py")
-    train = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(train)
+    from agents import train
     argv = trial_argv(cfg, args)
     rc = train.main(argv)
     if rc:

@@ -10,9 +10,7 @@ result cache (docs/validation/results.json).
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from towenv.validation.report import main  # noqa: E402
+from towenv.validation.report import main
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -20,8 +20,6 @@ pytest.importorskip("stable_baselines3")
 pytest.importorskip("yaml")          # rl-zoo YAML hyperparameters (PyYAML; should be in the `rl` extra)
 
 REPO = Path(__file__).resolve().parent.parent
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 import gymnasium as gym  # noqa: E402
 
@@ -43,6 +41,8 @@ TUNED = {
 
 
 def _script(name):
+    if name in ("train", "evaluate"):             # the command lines' code lives in the agents package
+        return importlib.import_module(f"agents.{name}")
     spec = importlib.util.spec_from_file_location(f"towenv_script_{name}", REPO / "scripts" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -22,6 +22,8 @@ COMP = "towenv/CompensatorGains-v0"
 
 
 def _script(name):
+    if name in ("train", "evaluate"):             # the command lines' code lives in the agents package
+        return importlib.import_module(f"agents.{name}")
     spec = importlib.util.spec_from_file_location(f"towenv_script_{name}_hygiene", REPO / "scripts" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -343,11 +343,7 @@ def test_evaluate_help_names_only_committed_policies():
 
 
 def test_train_says_when_it_rounds_the_step_count():
-    sys.path.insert(0, str(REPO / "scripts"))
-    try:
-        from train import rollout_steps
-    finally:
-        sys.path.pop(0)
+    from agents.train import rollout_steps
 
     class FakePPO:
         n_steps, n_envs = 256, 16
@@ -356,7 +352,7 @@ def test_train_says_when_it_rounds_the_step_count():
         n_envs = 4
 
     assert rollout_steps(FakePPO()) == 4096 and rollout_steps(FakeSAC()) == 4
-    src = (REPO / "scripts" / "train.py").read_text()
+    src = (REPO / "agents" / "train.py").read_text()
     assert "steps become" in src
 
 

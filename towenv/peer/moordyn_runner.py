@@ -89,7 +89,7 @@ class _Deck:
     line_name: str
 
 
-def _deck(scene) -> _Deck:
+def deck_parameters(scene) -> _Deck:
     from ..scene import load_scene
     sc = load_scene(scene)
     probs = []
@@ -136,7 +136,7 @@ def moordyn_input(scene, dtM: float = 2e-4, scheme: str = "RK2", zeta: float = 1
     ``start``: the coupled tow point's position (the free point is placed one cable length below it;
     MoorDyn's initial-condition solver then finds the static hang). ``segments`` overrides the scene's.
     """
-    d = _deck(scene)
+    d = deck_parameters(scene)
     n = int(segments or d.segments)
     x, y, z = (float(v) for v in start)
     depth = water_depth if water_depth is not None else max(1000.0, 10.0 * d.length) - z
@@ -271,7 +271,7 @@ def settled_state(scene, settle_time: float | None = None, dtM: float | None = N
     md = require_moordyn()
     from ..scene import load_scene
     sc = load_scene(scene)
-    d = _deck(sc)
+    d = deck_parameters(sc)
     n = int(segments or d.segments)
     if dtM is None:
         dtM = 0.7 * (d.length / n) / math.sqrt(d.EA / d.mu)
@@ -317,7 +317,7 @@ def run_moordyn(scene, duration: float, dtM: float = 2e-4, scheme: str = "RK2", 
 
     from ..scene import load_scene
     sc = load_scene(scene)
-    d = _deck(sc)
+    d = deck_parameters(sc)
     if initial_state is not None:
         if scheme not in ("RK2", "RK4"):
             # moordyn 2.7.2 aborts the whole process when a serialized RK state is loaded into e.g. Euler
