@@ -1,0 +1,150 @@
+"""The environments' pieces (issue 16, item 5) and the reference trajectories that pin their results.
+
+``tests/data/env_reference.npz`` holds observations, rewards, flags, reward components and info texts
+of both environments (single, vector, winch remesh, sensor noise and delay, wave preview, termination,
+numerical failure) recorded at commit cbf06b3, *before* the measurement rows and the batched stepper moved
+from ``towenv.core.batch`` to ``towenv.envs`` and termination and rendering became pieces. Regenerate it
+only for a change that is meant to alter the environments' results::
+
+    python tests/test_env_pieces.py --write-reference
+
+As for ``houbolt_reference.npz``, numba compiles for the host CPU: the file records :func:`fingerprint`
+and the comparison is bit for bit when it matches, to round-off otherwise.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+
+import towenv.envs  # noqa: E402,F401  (registers the ids)
+from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
+from towenv.envs.winch import WinchPayoutEnv  # noqa: E402
+
+REFERENCE = Path(__file__).parent / "data" / "env_reference.npz"
+
+
+def fingerprint() -> str:
+    """What decides the last bits of a compiled run: the host CPU numba compiles for and the library versions."""
+    import llvmlite
+    import llvmlite.binding as llvm
+    import numba
+    import scipy
+    return (f"cpu {llvm.get_host_cpu_name()}; numba {numba.__version__}; llvmlite {llvmlite.__version__}; "
+            f"numpy {np.__version__}; scipy {scipy.__version__}")
+
+
+# ----------------------------------------------------------------------------------------------------
+# reference trajectories (public API only, so the same code ran before and after the move)
+# ----------------------------------------------------------------------------------------------------
+def _rollout(env, acts, seed, options=None):
+    """Step ``env`` with ``acts`` from ``reset(seed, options)`` until the actions or the episode end."""
+    obs, _ = env.reset(seed=seed, options=options)
+    O, R, TE, TR, comps, texts = [obs], [], [], [], [], []
+    for a in acts:
+        o, r, te, tr, info = env.step(a)
+        O.append(o)
+        R.append(r)
+        TE.append(te)
+        TR.append(tr)
+        rc = info["reward_components"]
+        comps.append([rc[k] for k in sorted(rc)])
+        texts.append(f"{info.get('termination', '')}|{info.get('failure', '')}")
+        if te or tr:
+            break
+    width = max(len(c) for c in comps)
+    C = np.full((len(comps), width), np.nan)
+    for k, c in enumerate(comps):
+        C[k, :len(c)] = c
+    return {"obs": np.array(O), "rewards": np.array(R), "terminated": np.array(TE), "truncated": np.array(TR),
+            "components": C, "texts": np.array(texts)}
+
+
+def _vector_rollout(env_id, n, steps, seed, **kw):
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kw)
+    obs, _ = venv.reset(seed=seed)
+    dim = venv.single_action_space.shape[0]
+    acts = np.random.default_rng(seed).uniform(-1, 1, (steps, n, dim)).astype(np.float32)
+    O, R, TE, TR, texts = [obs], [], [], [], []
+    for a in acts:
+        o, r, te, tr, info = venv.step(a)
+        O.append(o)
+        R.append(r)
+        TE.append(te)
+        TR.append(tr)
+        term = info.get("termination")
+        texts.append("|".join(str(term[i]) if term is not None and info["_termination"][i] else ""
+                              for i in range(n)))
+    venv.close()
+    return {"obs": np.array(O), "rewards": np.array(R), "terminated": np.array(TE), "truncated": np.array(TR),
+            "texts": np.array(texts)}
+
+
+def _uniform(n, dim, seed):
+    return np.random.default_rng(seed).uniform(-1, 1, (n, dim)).astype(np.float32)
+
+
+def reference_cases(termination=None):
+    """{case: {array name: array}}. ``termination`` (a piece) is passed to every environment when given."""
+    kw = {} if termination is None else {"termination": termination}
+    out = {}
+    out["comp"] = _rollout(CompensatorGainsEnv(**kw), _uniform(120, 2, 10), seed=0)
+    out["comp_noise_delay_eval"] = _rollout(
+        CompensatorGainsEnv(sensor_noise={"fish_heave_dev": 0.01, "top_tension": 0.02}, obs_delay=2, **kw),
+        _uniform(80, 2, 11), seed=5, options={"eval_index": 3})
+    payout = np.concatenate([np.full((100, 1), 0.8, np.float32), _uniform(100, 1, 12)])   # pays out: remeshes
+    out["winch_remesh"] = _rollout(WinchPayoutEnv(**kw), payout, seed=1)
+    out["winch_preview"] = _rollout(
+        WinchPayoutEnv(observations=("tow_vel_along", "time_left", "wave_preview", "last_action", "fish_heave_dev"),
+                       preview_distances=(10.0, 30.0), mru_delay=0.1, mean_time_constant=None, **kw),
+        _uniform(60, 1, 13), seed=2)
+    out["floor"] = _rollout(CompensatorGainsEnv(floor_depth=30.0, **kw), _uniform(3, 2, 14), seed=0)
+    out["parted"] = _rollout(WinchPayoutEnv(breaking_load=1000.0, **kw), _uniform(3, 1, 15), seed=0)
+    fail = CompensatorGainsEnv(dt=0.5, control_hz=2.0, sim_overrides={"max_step_cuts": 0}, **kw)
+    out["failure"] = _rollout(fail, np.zeros((120, 2), np.float32), seed=0, options={"eval_index": 0})
+    out["vector_winch"] = _vector_rollout("towenv/WinchPayout-v0", 3, 70, seed=7, episode_seconds=3.0, **kw)
+    out["vector_comp"] = _vector_rollout("towenv/CompensatorGains-v0", 2, 40, seed=8, floor_depth=None,
+                                         breaking_load={"secondary": 69.0}, **kw)
+    return out
+
+
+def write_reference(path=REFERENCE):
+    flat = {"fingerprint": np.array(fingerprint())}
+    for case, arrays in reference_cases().items():
+        for name, a in arrays.items():
+            flat[f"{case}::{name}"] = a
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **flat)
+    return flat
+
+
+if __name__ == "__main__" and "--write-reference" in sys.argv:
+    flat = write_reference()
+    print(f"wrote {REFERENCE} ({len(flat)} arrays)")
+
+
+# ----------------------------------------------------------------------------------------------------
+# the reference
+# ----------------------------------------------------------------------------------------------------
+def _assert_matches_reference(cases):
+    stored = np.load(REFERENCE)
+    made_here = str(stored["fingerprint"]) == fingerprint()
+    for case, arrays in cases.items():
+        for name, got in arrays.items():
+            want = stored[f"{case}::{name}"]
+            where = f"{case}::{name}"
+            if made_here or got.dtype.kind in "bUS":
+                np.testing.assert_array_equal(got, want, err_msg=where)
+            else:
+                # another CPU or library build: numba's code generation differs in the last bits
+                np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-9, err_msg=where)
+
+
+def test_default_pieces_reproduce_the_reference_trajectories():
+    """Both environments, single and vector (remesh, noise, delay, preview, termination, failure), give the
+    trajectories recorded before the stepper left the core, bit for bit on the machine that made them."""
+    _assert_matches_reference(reference_cases())
