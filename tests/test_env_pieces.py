@@ -25,7 +25,9 @@ import towenv.envs  # noqa: E402,F401  (registers the ids)
 from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
 from towenv.envs.winch import WinchPayoutEnv  # noqa: E402
 
-REFERENCE = Path(__file__).parent / "data" / "env_reference.npz"
+#: tests/data/env_reference.npz (looked up from this file's folder upwards, so the test can move into a sub-folder)
+REFERENCE = next((d / "data" / "env_reference.npz" for d in Path(__file__).resolve().parents
+                  if (d / "data" / "env_reference.npz").exists()), Path(__file__).parent / "data" / "env_reference.npz")
 
 
 def fingerprint() -> str:
@@ -148,3 +150,27 @@ def test_default_pieces_reproduce_the_reference_trajectories():
     """Both environments, single and vector (remesh, noise, delay, preview, termination, failure), give the
     trajectories recorded before the stepper left the core, bit for bit on the machine that made them."""
     _assert_matches_reference(reference_cases())
+
+
+def test_kernel_data_runs_the_kernel_as_advance_steps_does():
+    """``Simulator.kernel_data()``: the kernel's arrays by reference; running ``kernels.advance`` on them is
+    ``advance_steps`` (the compatibility ``towenv.core.batch.kernel_args`` gives the same tuples)."""
+    from towenv.core import kernels as K
+    from towenv.core.batch import kernel_args
+    from towenv.core.simulator import KernelData, Simulator
+
+    a, b = Simulator("two_part_tow_1"), Simulator("two_part_tow_1")
+    kd = a.kernel_data()
+    assert isinstance(kd, KernelData) and kd.state[0] is a.hist_r and kd.comp is a.comp and kd.winch is a.winch
+    head, wave = kernel_args(a)
+    assert len(head) == len(kd.head) and all(x is y for x, y in zip(head[6:], kd.head[6:])) and wave is kd.wave
+    n, dt = 40, a.dt
+    tops = a.path.position(np.arange(1, n + 1) * dt)
+    st, _, _, _ = K.advance(n, dt, tops, *kd.head, 0.0, kd.wave)
+    a.step_count += n
+    b.advance_steps(n)
+    assert st == K.OK
+    np.testing.assert_array_equal(a.hist_r, b.hist_r)       # calm sea: the same tow points, the same steps
+    np.testing.assert_array_equal(a.counters[:2], b.counters[:2])
+    exc = kd.divergence(K.FAIL_NAN, -1, 0.0, 1.0)
+    assert exc.time == 1.0 and "non-finite" in str(exc)

@@ -1,4 +1,4 @@
-"""The compiled batched environments (towenv.core.batch, towenv.envs.vector, towenv.envs.sb3).
+"""The compiled batched environments (towenv.envs.stepper, towenv.envs.vector, towenv.envs.sb3).
 
 The batched vector env must reproduce N single environments with the same seeds and actions BIT FOR BIT
 (observations, rewards, flags and infos), including winch remeshes, numerical failures, sensor noise,
@@ -18,7 +18,8 @@ gym = pytest.importorskip("gymnasium")
 import towenv.envs  # noqa: E402,F401  (registers the ids)
 from gymnasium.utils.env_checker import data_equivalence  # noqa: E402
 from gymnasium.vector import AutoresetMode  # noqa: E402
-from towenv.core import batch as BT  # noqa: E402
+from towenv.envs import measurements as MS  # noqa: E402
+from towenv.envs import stepper as ST  # noqa: E402
 from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
 from towenv.envs.winch import WinchPayoutEnv  # noqa: E402
 
@@ -239,7 +240,7 @@ def test_tow_point_phase_recurrence_matches_exact_path():
     env = WinchPayoutEnv()
     env.reset(seed=0, options={"eval_index": 8})                    # code 5: the largest motions
     sim = env.sim
-    buf = BT.TowPointBuffer(sim)
+    buf = ST.TowPointBuffer(sim)
     assert buf._linear(0.0, 1.0) is not None                         # the fast path is really used
     for first in (0, 5, 128, 1000, 6000, 60_000):                   # up to 3000 s
         got = buf.block(first, 300)
@@ -306,18 +307,18 @@ def test_registration_vector_entry_point():
 
 def test_stepper_input_errors():
     with pytest.raises(ValueError, match="num_copies"):
-        BT.BatchStepper(0)
+        ST.BatchStepper(0)
     env = CompensatorGainsEnv()
     with pytest.raises(ValueError, match="n must be in"):
-        env._rows.stepper.step(BT.BLOCK + 1, BT.ACT_NONE)
-    st = BT.BatchStepper(2)
+        env._rows.stepper.step(ST.BLOCK + 1, ST.ACT_NONE)
+    st = ST.BatchStepper(2)
     st.set_copy(0, env.sim, "fish", env._tension_layout(env.sim)[0])
     with pytest.raises(RuntimeError, match="set_copy"):
-        st.step(1, BT.ACT_NONE)
+        st.step(1, ST.ACT_NONE)
     other = CompensatorGainsEnv(dt=0.025, control_hz=20.0)
     with pytest.raises(ValueError, match="same physics step"):
         st.set_copy(1, other.sim, "fish", other._tension_layout(other.sim)[0])
-    assert math.isfinite(env._rows.stepper.M[0, BT.M_TOP_T])
+    assert math.isfinite(env._rows.stepper.M[0, MS.M_TOP_T])
 
 
 class _PlainReward:
@@ -356,7 +357,6 @@ def test_swapped_pieces_use_the_dict_path_bit_for_bit():
 def test_parallel_kernel_has_its_own_cache_entry():
     # numba's disk cache is keyed by qualified name + line: the serial and the prange kernel must not be the
     # same function, or the "parallel" dispatcher silently loads the serial machine code from the cache
-    from towenv.core import batch
-    assert batch._step_batch_parallel.py_func.__qualname__ != batch._step_batch.py_func.__qualname__
-    assert batch._step_batch_parallel.targetoptions.get("parallel")
-    assert not batch._step_batch.targetoptions.get("parallel")
+    assert ST._step_batch_parallel.py_func.__qualname__ != ST._step_batch.py_func.__qualname__
+    assert ST._step_batch_parallel.targetoptions.get("parallel")
+    assert not ST._step_batch.targetoptions.get("parallel")

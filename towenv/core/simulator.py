@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -74,6 +75,33 @@ class SolverSettings:
                          self.angle_tolerance, self.max_step_cuts,
                          1.0 if self.tension_solve == "as_published" else 0.0, self.rechart_pitch,
                          1.0 if self.planar else 0.0, 1.0 if self.newton_stop == "estimate" else 0.0], float)
+
+
+class KernelData(NamedTuple):
+    """What :func:`towenv.core.kernels.advance` works on for one Simulator, by reference (not copies):
+    ``Simulator.kernel_data()``. A caller that runs the kernel itself (the environments' batched stepper,
+    the recorder) calls ``kernels.advance(n, dt, tops, *kd.head, t0, kd.wave)``; on ``NEED_REMESH`` it calls
+    ``kd.remesh()`` and fetches ``kernel_data()`` again (the arrays are new); on a failure status
+    ``kd.divergence(status, element, max_change, t_fail)`` is the exception ``advance_steps`` would raise.
+    It must keep ``step_count`` itself. The tuples' layouts are the kernel's, not an API: pass them whole."""
+    args: tuple             # (top_node, topology, segment, body and environment parameters): the discretisation
+    settings: np.ndarray    # SolverSettings.array()
+    state: tuple            # the dynamic state (position/angle histories, tensions, top reaction, actuators, charts)
+    work: tuple             # work arrays
+    saved: tuple            # the last good step (roll-back)
+    counters: np.ndarray    # steps, iterations, max iterations, step cuts, re-charts
+    comp: np.ndarray        # compensator parameters (commands are written here)
+    winch: np.ndarray       # winch parameters (commands are written here)
+    wstate: np.ndarray      # winch state
+    wave: tuple             # wave components of the orbital-velocity option
+    remesh: Callable[[], None]
+    divergence: Callable[..., SimulationDivergence]
+
+    @property
+    def head(self) -> tuple:
+        """The arguments of ``kernels.advance`` between ``tops`` and ``t0``."""
+        return tuple(self.args) + (self.settings, self.state, self.work, self.saved, self.counters, self.comp,
+                                   self.winch, self.wstate)
 
 
 def load(scene, overrides=None):
@@ -430,6 +458,12 @@ class Simulator:
         self.restore(self._initial)
         self.counters[:] = 0
         self.remesh_count = 0
+
+    def kernel_data(self) -> KernelData:
+        """The arrays the compiled kernel works on and the two hooks of ``advance_steps`` (:class:`KernelData`),
+        for callers that run ``kernels.advance`` themselves; they change on a winch remesh and ``set_sea``."""
+        return KernelData(self._args, self.settings.array(), self._state, self._ws, self._saved, self.counters,
+                          self.comp, self.winch, self.wstate, self._wave_arrays(), self._remesh, self._divergence)
 
     def _run(self, tops, dt, t_start):
         done = 0

@@ -1,6 +1,6 @@
 """``TowEnv``: the Gymnasium base environment around one :class:`towenv.Simulator` per configuration.
 
-The physics core knows nothing about Gymnasium. A step runs through :class:`towenv.core.batch.BatchStepper`
+The physics core knows nothing about Gymnasium. A step runs through :class:`towenv.envs.stepper.BatchStepper`
 (one compiled call: actuator command, all physics sub-steps of ``kernels.advance``, measurement row) — the
 same code as the batched vector environment (:mod:`towenv.envs.vector`), here with one row; the episode's
 reference values, previous action and measurement live in that row (:class:`EnvRows`). Reset uses the public
@@ -22,10 +22,11 @@ import numpy as np
 from gymnasium import spaces
 from numba import njit
 
-from ..core import batch as BT
 from ..sea import SeaState
 from ..sea.spectra import _CONVENTIONS as SEA_CONVENTIONS
 from . import checks as C
+from . import measurements as MS
+from . import stepper as ST
 from .pieces import CHANNELS, HeavePitchReward, Observer, RandomCodeSeas, default_eval_sea_states
 
 __all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD", "EnvRows", "RESET_OPTIONS", "MAX_OBS_DELAY"]
@@ -219,8 +220,8 @@ class TowEnv(gym.Env):
                                      planar_ok=heading_spread_deg == 0 and sea_generator is None)
         self.physics_dt = float(dt)
         ratio = 1.0 / (control_hz * dt)
-        if not ratio < BT.BLOCK + 0.5:
-            raise C.ConfigError(f"{own}: control_hz and dt must give at most {BT.BLOCK} physics steps per control step "
+        if not ratio < ST.BLOCK + 0.5:
+            raise C.ConfigError(f"{own}: control_hz and dt must give at most {ST.BLOCK} physics steps per control step "
                                 f"(1/(control_hz·dt) = 1/({control_hz:g} Hz · {dt:g} s) = {ratio:g})")
         self.substeps = max(1, int(round(ratio)))
         if abs(self.substeps * dt * control_hz - 1.0) > 1e-6:
@@ -228,9 +229,9 @@ class TowEnv(gym.Env):
                           f"using {self.substeps} physics steps per control step (control period "
                           f"{self.substeps * dt:g} s)", stacklevel=2)
         self.dt = self.substeps * self.physics_dt           # control period (MuJoCo frame_skip convention)
-        if round(self.mru_delay / self.physics_dt) > BT.BLOCK // 2:
-            raise C.ConfigError(f"{own}: mru_delay must be at most {BT.BLOCK // 2} physics steps "
-                                f"({BT.BLOCK // 2 * self.physics_dt:g} s at dt = {self.physics_dt:g} s; "
+        if round(self.mru_delay / self.physics_dt) > ST.BLOCK // 2:
+            raise C.ConfigError(f"{own}: mru_delay must be at most {ST.BLOCK // 2} physics steps "
+                                f"({ST.BLOCK // 2 * self.physics_dt:g} s at dt = {self.physics_dt:g} s; "
                                 f"got {self.mru_delay!r})")
         self.episode_seconds = float(episode_seconds)
         self.max_steps = max(1, int(round(episode_seconds / self.dt)))
@@ -274,13 +275,13 @@ class TowEnv(gym.Env):
     def _install_row(self) -> None:
         """Install the current simulator in this env's row of the batch stepper (as it is: a new env's
         simulator is at its initial state)."""
-        self._rows.stepper.refs[self._row, BT.R_MAXSTEPS] = self.max_steps
+        self._rows.stepper.refs[self._row, MS.R_MAXSTEPS] = self.max_steps
         self._rows.stepper.set_copy(self._row, self.sim, self.body, self._inv_seg)
 
     # ------------------------------------------------------------------ per-episode state (in the rows)
     @property
     def _steps(self) -> int:
-        return int(self._rows.stepper.refs[self._row, BT.R_STEPS])
+        return int(self._rows.stepper.refs[self._row, MS.R_STEPS])
 
     @property
     def _prev_action(self) -> np.ndarray:
@@ -288,11 +289,11 @@ class TowEnv(gym.Env):
 
     @property
     def _z_ref(self) -> float:
-        return float(self._rows.stepper.refs[self._row, BT.R_ZREF])
+        return float(self._rows.stepper.refs[self._row, MS.R_ZREF])
 
     @property
     def _T_ref(self) -> float:
-        return float(self._rows.stepper.refs[self._row, BT.R_TREF])
+        return float(self._rows.stepper.refs[self._row, MS.R_TREF])
 
     @property
     def _last_m(self) -> dict:
@@ -358,8 +359,8 @@ class TowEnv(gym.Env):
     def _line_names(sim):
         return [ln.name for ln in sim.scene.lines]
 
-    #: what the command columns mean (``towenv.core.batch.ACT_*``)
-    ACT_KIND = BT.ACT_NONE
+    #: what the command columns mean (``towenv.envs.stepper.ACT_*``)
+    ACT_KIND = ST.ACT_NONE
     #: measurement columns that belong to the actuator (reported in ``_last_m``)
     ACTUATOR_KEYS: tuple[str, ...] = ()
 
@@ -374,7 +375,7 @@ class TowEnv(gym.Env):
         return np.zeros(self.ACTION_DIM)
 
     def _actuator_refs(self, refs: np.ndarray, amap: np.ndarray) -> None:
-        """Per-episode actuator reference values of this copy (``refs``: its row of ``BT.R_*``; ``amap``:
+        """Per-episode actuator reference values of this copy (``refs``: its row of ``MS.R_*``; ``amap``:
         its row of action-map parameters used by :meth:`_commands`)."""
 
     # ------------------------------------------------------------------ configuration
@@ -502,14 +503,14 @@ class TowEnv(gym.Env):
         inv_seg, top_inv, _ = self._tension_layout(sim)
         ref = st.refs[i]
         ref[:] = 0.0
-        ref[BT.R_ZREF] = float(sim.body_state(self.body)["position"][2])
-        ref[BT.R_TREF] = max(float(sim.top_tension), 1e-9)
-        ref[BT.R_TOPINV] = top_inv
-        ref[BT.R_HALF_STROKE] = ref[BT.R_VMAX] = 1.0
-        ref[BT.R_MAXSTEPS] = self.max_steps
-        ref[BT.R_MRU_DELAY] = round(self.mru_delay / self.physics_dt)
-        ref[BT.R_MEAN_TAU] = 0.0 if self.mean_time_constant is None else self.mean_time_constant
-        ref[BT.R_PITCH0] = float(sim.body_state(self.body)["euler"][1])
+        ref[MS.R_ZREF] = float(sim.body_state(self.body)["position"][2])
+        ref[MS.R_TREF] = max(float(sim.top_tension), 1e-9)
+        ref[MS.R_TOPINV] = top_inv
+        ref[MS.R_HALF_STROKE] = ref[MS.R_VMAX] = 1.0
+        ref[MS.R_MAXSTEPS] = self.max_steps
+        ref[MS.R_MRU_DELAY] = round(self.mru_delay / self.physics_dt)
+        ref[MS.R_MEAN_TAU] = 0.0 if self.mean_time_constant is None else self.mean_time_constant
+        ref[MS.R_PITCH0] = float(sim.body_state(self.body)["euler"][1])
         self._actuator_refs(ref, rows.amap[i])
         st.set_copy(i, sim, self.body, self._inv_seg)
         rows.prev_action[i] = self._reset_action()
@@ -545,7 +546,7 @@ class TowEnv(gym.Env):
         own = type(self).__name__
         if self._needs_reset == "ended":
             return (f"{own}.step called after the episode ended (terminated or truncated at t = "
-                    f"{float(self._rows.stepper.M[self._row, BT.M_T]):g} s): call reset() to start a new episode")
+                    f"{float(self._rows.stepper.M[self._row, MS.M_T]):g} s): call reset() to start a new episode")
         if self._needs_reset == "failed":
             return f"{own}.step called after a reset() that raised: call reset() again"
         return f"{own}.step called before reset(): call reset() first"
@@ -594,7 +595,7 @@ class TowEnv(gym.Env):
     def _row_dict(self, row, action, preview=None) -> dict:
         """A measurement row as the dict ``m`` of :data:`~towenv.envs.pieces.MEASUREMENTS` (for custom
         observers / reward functions and the renderer)."""
-        m = {k: float(row[BT.COL[k]]) for k in self._BASE_KEYS + self.ACTUATOR_KEYS}
+        m = {k: float(row[MS.COL[k]]) for k in self._BASE_KEYS + self.ACTUATOR_KEYS}
         m["last_action"] = np.array(action, float)
         if preview is not None:
             m["wave_preview"] = np.asarray(preview, float)
@@ -631,14 +632,14 @@ class TowEnv(gym.Env):
 
     def _terminal_reason(self, row) -> str:
         """Why a copy whose measurement row met a termination condition terminated."""
-        if row[BT.M_T_RATIO] >= 1.0:
+        if row[MS.M_T_RATIO] >= 1.0:
             _, top_inv, lines = self._tension_layout(self.sim)
             T = self.sim.tensions
             which = [n for n, segs, k in lines if segs.size and float(T[segs].max()) * k >= 1.0]
             if self.sim.top_tension * top_inv >= 1.0:
                 which.append("tow point")
             return f"cable_parted: tension above the breaking load ({', '.join(dict.fromkeys(which))})"
-        return f"{self.body}_below_floor: depth {row[BT.M_DEPTH]:.1f} m > {self.floor_depth:g} m"
+        return f"{self.body}_below_floor: depth {row[MS.M_DEPTH]:.1f} m > {self.floor_depth:g} m"
 
     # ------------------------------------------------------------------ rendering / pickling
     def render(self):
@@ -680,12 +681,12 @@ class TowEnv(gym.Env):
 # batched stepping shared by TowEnv (one row) and the vector environments (B rows)
 # =====================================================================================================
 class EnvRows:
-    """Per-copy arrays of ``n`` environment copies stepped together: the :class:`~towenv.core.batch.BatchStepper`
+    """Per-copy arrays of ``n`` environment copies stepped together: the :class:`~towenv.envs.stepper.BatchStepper`
     (simulators, reference values ``refs``, measurement rows ``M``, commands ``U``), the actions, the
     previous actions, per-copy action maps ``amap`` and the environment object of each row (``envs``)."""
 
     def __init__(self, n: int, action_dim: int, parallel: bool = False):
-        self.stepper = BT.BatchStepper(n, parallel=parallel)
+        self.stepper = ST.BatchStepper(n, parallel=parallel)
         self.actions = np.zeros((n, action_dim))
         self.prev_action = np.zeros((n, action_dim))
         self.amap = np.zeros((n, 8))
@@ -713,9 +714,9 @@ class StepResult:
         comps = dict(zip(self.names, self.comps[k].tolist())) if self.names is not None else self.comps[k]
         if k in self.terminal_costs:
             comps["terminal"] = self.terminal_costs[k]
-        info = {"t": float(M[BT.M_T]), "reward_components": comps, "fish_heave": float(M[BT.M_HEAVE]),
-                "fish_pitch": float(M[BT.M_PITCH]), "top_tension": float(M[BT.M_TOP_T]),
-                "end_stop_hits": int(M[BT.M_HITS]), "slack": bool(M[BT.M_MIN_T] <= e._slack())}
+        info = {"t": float(M[MS.M_T]), "reward_components": comps, "fish_heave": float(M[MS.M_HEAVE]),
+                "fish_pitch": float(M[MS.M_PITCH]), "top_tension": float(M[MS.M_TOP_T]),
+                "end_stop_hits": int(M[MS.M_HITS]), "slack": bool(M[MS.M_MIN_T] <= e._slack())}
         if k in self.reasons:
             info["termination"] = self.reasons[k]
         f = self.failures.get(int(i))
@@ -777,7 +778,7 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
         for k in np.flatnonzero(term):
             e = envs[k]
             reasons[int(k)] = e._terminal_reason(M[idx[k]])
-            tc = float(e.reward_fn.terminal_cost(e.max_steps - int(refs[idx[k], BT.R_STEPS])))
+            tc = float(e.reward_fn.terminal_cost(e.max_steps - int(refs[idx[k], MS.R_STEPS])))
             tcs[int(k)] = tc
             R[k] -= tc
             if not math.isfinite(R[k]):
@@ -799,10 +800,10 @@ def _post_rows(M, refs, A, PA, idx, floor, has_floor, R, term, trunc):
     nterm = 0
     for k in range(idx.shape[0]):
         b = idx[k]
-        t = M[b, BT.M_T_RATIO] >= 1.0 or (has_floor and M[b, BT.M_DEPTH] > floor)
+        t = M[b, MS.M_T_RATIO] >= 1.0 or (has_floor and M[b, MS.M_DEPTH] > floor)
         term[k] = t
         nterm += t
-        trunc[k] = refs[b, BT.R_STEPS] >= refs[b, BT.R_MAXSTEPS]
+        trunc[k] = refs[b, MS.R_STEPS] >= refs[b, MS.R_MAXSTEPS]
         if not math.isfinite(R[k]):           # cannot happen by construction; belt and braces
             R[k] = -1e6
         for j in range(A.shape[1]):

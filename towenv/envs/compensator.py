@@ -19,8 +19,9 @@ import math
 import numpy as np
 from numba import njit
 
-from ..core import batch as BT
 from . import checks as C
+from . import measurements as MS
+from . import stepper as ST
 from .base import TowEnv
 
 __all__ = ["CompensatorGainsEnv", "COMPENSATOR_CLASSES"]
@@ -49,7 +50,7 @@ class CompensatorGainsEnv(TowEnv):
                             "comp_stroke_vel", "fish_heave_dev", "fish_pitch_dev", "fish_heave_rate", "fish_pitch_rate",
                             "last_action")
     ACTION_DIM = 2
-    ACT_KIND = BT.ACT_COMP_GAINS
+    ACT_KIND = ST.ACT_COMP_GAINS
     ACTUATOR_KEYS = ("comp_stroke", "comp_stroke_vel", "end_stop_hits", "comp_stiffness", "comp_damping", "effort")
 
     def __init__(self, *, compensator_class: str | None = None, stiffness_floor: float | None = None,
@@ -118,7 +119,7 @@ class CompensatorGainsEnv(TowEnv):
     @property
     def _hits(self) -> int:
         """Compensator end-stop hits counted so far in the episode."""
-        return int(self._rows.stepper.refs[self._row, BT.R_HITS])
+        return int(self._rows.stepper.refs[self._row, MS.R_HITS])
 
     def _commands(self, A, rows, U, amap):
         return _log_gains(A, rows, amap, U)
@@ -127,8 +128,8 @@ class CompensatorGainsEnv(TowEnv):
         self._check_actuator(self.sim)          # bounds are per configuration (same for all by default)
         amap[0:4] = self._k_map
         amap[4:8] = self._b_map
-        ref[BT.R_HALF_STROKE] = self._half_stroke
-        ref[BT.R_HITS] = 0.0
+        ref[MS.R_HALF_STROKE] = self._half_stroke
+        ref[MS.R_HITS] = 0.0
 
     def _reset_action(self):
         cs = self.sim.compensator_state()

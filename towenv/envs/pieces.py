@@ -22,7 +22,7 @@ from typing import Mapping, Sequence
 import numpy as np
 from numba import njit
 
-from ..core.batch import COL, MEAS_COLUMNS
+from .measurements import COL, MEAS_COLUMNS
 from ..sea import SeaState
 from ..stats import RATE_LIMITS
 
@@ -225,7 +225,7 @@ class Observer:
     def measure_rows(self, M: np.ndarray, A: np.ndarray, rows: np.ndarray, rngs=None,
                      preview: np.ndarray | None = None) -> np.ndarray:
         """Undelayed observations (len(rows), size) float32 of measurement rows ``M[rows]`` (columns
-        :data:`~towenv.core.batch.MEAS_COLUMNS`) with actions ``A[rows]`` — the compiled, batched form of
+        :data:`~towenv.envs.measurements.MEAS_COLUMNS`) with actions ``A[rows]`` — the compiled, batched form of
         :meth:`measure` (same scaling, noise, NaN handling and clipping). ``rngs[i]`` draws row i's noise."""
         noisy = self._noisy and rngs is not None
         if noisy:
@@ -472,7 +472,7 @@ class HeavePitchReward(RewardFn):
 
     def batch(self, M: np.ndarray, A: np.ndarray, A_prev: np.ndarray, rows: np.ndarray):
         """Compiled batched form of ``__call__`` for measurement rows ``M[rows]`` (columns
-        :data:`~towenv.core.batch.MEAS_COLUMNS`): ``(rewards (n,), components (n, 10))`` with the columns in
+        :data:`~towenv.envs.measurements.MEAS_COLUMNS`): ``(rewards (n,), components (n, 10))`` with the columns in
         the order of :attr:`COMPONENTS`."""
         wv = self.__dict__.get("_wv")
         if wv is None:                # the weights are constructor parameters: fixed after __init__

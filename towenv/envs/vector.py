@@ -2,7 +2,7 @@
 
 Each copy keeps its own :class:`~towenv.envs.base.TowEnv` object (configuration, ``np_random``, sea
 generator, observer ring buffer, simulators), but all copies share one :class:`~towenv.envs.base.EnvRows`:
-a :class:`~towenv.core.batch.BatchStepper` holding every copy's kernel arguments in a ``numba.typed.List``.
+a :class:`~towenv.envs.stepper.BatchStepper` holding every copy's kernel arguments in a ``numba.typed.List``.
 One ``step`` maps all actions to actuator commands, advances all copies' physics sub-steps and gathers
 their measurements in one numba call (serial loop over copies, or ``prange`` with ``parallel=True``),
 then computes observations, rewards and flags vectorised over the copies. Copies that need a winch remesh
@@ -31,8 +31,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ..core import batch as BT
 from . import checks as C
+from . import measurements as MS
 from .base import EnvRows, step_copies
 from .compensator import CompensatorGainsEnv
 from .winch import WinchPayoutEnv
@@ -216,12 +216,12 @@ class TowVectorEnv(VectorEnv):
         for j, name in enumerate(res.names):
             rc[name] = col(res.comps[:, j], float)
             rc["_" + name] = mask.copy()
-        infos = {"t": col(M[idx, BT.M_T], float), "_t": mask.copy(), "reward_components": rc,
-                 "_reward_components": mask.copy(), "fish_heave": col(M[idx, BT.M_HEAVE], float),
-                 "_fish_heave": mask.copy(), "fish_pitch": col(M[idx, BT.M_PITCH], float),
-                 "_fish_pitch": mask.copy(), "top_tension": col(M[idx, BT.M_TOP_T], float),
-                 "_top_tension": mask.copy(), "end_stop_hits": col(M[idx, BT.M_HITS].astype(int), int),
-                 "_end_stop_hits": mask.copy(), "slack": col(M[idx, BT.M_MIN_T] <= self.envs[0]._slack(), bool),
+        infos = {"t": col(M[idx, MS.M_T], float), "_t": mask.copy(), "reward_components": rc,
+                 "_reward_components": mask.copy(), "fish_heave": col(M[idx, MS.M_HEAVE], float),
+                 "_fish_heave": mask.copy(), "fish_pitch": col(M[idx, MS.M_PITCH], float),
+                 "_fish_pitch": mask.copy(), "top_tension": col(M[idx, MS.M_TOP_T], float),
+                 "_top_tension": mask.copy(), "end_stop_hits": col(M[idx, MS.M_HITS].astype(int), int),
+                 "_end_stop_hits": mask.copy(), "slack": col(M[idx, MS.M_MIN_T] <= self.envs[0]._slack(), bool),
                  "_slack": mask.copy()}
         if res.terminal_costs:
             tc = np.zeros(n)

@@ -24,8 +24,9 @@ import math
 
 from numba import njit
 
-from ..core import batch as BT
 from . import checks as C
+from . import measurements as MS
+from . import stepper as ST
 from .base import TowEnv
 
 __all__ = ["WinchPayoutEnv", "WINCH_CLASSES"]
@@ -52,7 +53,7 @@ class WinchPayoutEnv(TowEnv):
                             "tow_vel_z", "tow_acc_x", "tow_acc_z", "top_tension", "winch_speed", "winch_length_dev",
                             "fish_heave_dev", "fish_pitch_dev", "fish_heave_rate", "fish_pitch_rate", "last_action")
     ACTION_DIM = 1
-    ACT_KIND = BT.ACT_WINCH_SPEED
+    ACT_KIND = ST.ACT_WINCH_SPEED
     ACTUATOR_KEYS = ("winch_speed", "winch_length_dev", "winch_length", "effort", "winch_power")
 
     def __init__(self, *, winch_class: str = "standard", winch_max_speed: float | None = None,
@@ -106,15 +107,15 @@ class WinchPayoutEnv(TowEnv):
     @property
     def _L0(self) -> float:
         """Deployed winch-line length at the start of the episode (m)."""
-        return float(self._rows.stepper.refs[self._row, BT.R_L0])
+        return float(self._rows.stepper.refs[self._row, MS.R_L0])
 
     def _commands(self, A, rows, U, amap):
         return _speed_commands(A, rows, self.winch_max_speed, U)
 
     def _actuator_refs(self, ref, amap):
-        ref[BT.R_VMAX] = self.winch_max_speed
-        ref[BT.R_L0] = float(self.sim.winch_state()["length"])
-        ref[BT.R_EFFORT] = 1.0
+        ref[MS.R_VMAX] = self.winch_max_speed
+        ref[MS.R_L0] = float(self.sim.winch_state()["length"])
+        ref[MS.R_EFFORT] = 1.0
 
 
 @njit(cache=True)
