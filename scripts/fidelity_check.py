@@ -45,7 +45,7 @@ and the error left after the second is already within the criterion. Since round
 stop on that estimated remaining error (`solver.newton_stop = "estimate"`, :data:`towenv.fidelity.NEWTON_STOP`;
 docs/model-notes.md): 10–25 % fewer iterations at Δt 0.04–0.15 s in head and bow seas (1–6 % in a following
 sea or a series tow), the fish statistics moved by ≤ 0.35 % in 15 measured choices, and nothing saved at the fine default's 0.01 s, where almost every step converges within two
-iterations (tests/test_newton_stop.py) — so the speed-up is not bought by a looser fine default. An
+iterations (tests/unit/test_newton_stop.py) — so the speed-up is not bought by a looser fine default. An
 irregular sea adds the vessel motion (~11–17 µs) to every step. (`python scripts/newton_iterations.py`
 reproduces the iteration figures.)
 

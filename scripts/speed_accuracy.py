@@ -61,7 +61,7 @@ EXPLICIT_ZETA = 0.25
 START_LOAD = "?"
 END_MACHINE = None
 MISSING_SOLVERS = [
-    ("thesis recursion (4.38)–(4.40) \"as published\"", "kept only as a failing regression check (tests/test_twin.py)"),
+    ("thesis recursion (4.38)–(4.40) \"as published\"", "kept only as a failing regression check (tests/verification/test_twin.py)"),
 ]
 
 

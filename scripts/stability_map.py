@@ -463,7 +463,7 @@ model, Newton on the node positions, up to 4 step halvings, no axial damping), `
 Not mapped: the linearised frequency-domain model (it has no time step), the reduced models (`solver.planar`,
 body `dof = "surge_heave_pitch"`: the same Houbolt integrator with fewer unknowns, on the speed/accuracy chart,
 docs/speed-accuracy.md) and the thesis's tension recursion "as published" (`solver.tension_solve`, which fails
-outright at the thesis's own step guide, tests/test_explicit.py).
+outright at the thesis's own step guide, tests/unit/test_explicit.py).
 """,
          summary(grid, beh, ser, newton),
          "## Map: shared deck (peer deck at 2 m/s, 1 m heave at 8 s, 8 s ramp)\n",

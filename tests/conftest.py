@@ -1,22 +1,8 @@
-import math
-
+"""Fixtures shared by every test folder (unit, verification, envs, agents, validation). Plain helpers are in
+``tests/support/helpers.py`` (``from helpers import peer_deck``)."""
 import pytest
 
-RHO = 1025.0
-G = 9.80665
-
-
-def peer_deck(speed=0.0, segments=20, dt=0.05, cda=0.5, **solver):
-    """The verification.md standard deck: 100 m cable + 500 kg point body (as a scene dict)."""
-    return dict(
-        name="peer_deck",
-        water=dict(density=RHO, gravity=G),
-        vessel=dict(speed=speed),
-        lines=[dict(name="cable", length=100.0, segments=segments, diameter=0.02, mass_per_length=1.0, EA=2e7,
-                    cn=1.2, ct=0.01 * math.pi, can=1.0, cat=0.0, top="vessel", bottom={"body": "ball"})],
-        bodies=[dict(name="ball", kind="ball", mass=500.0, volume=0.1, drag_area=cda, added_mass_coefficient=1.0)],
-        solver=dict(dt=dt, **solver),
-    )
+from helpers import peer_deck
 
 
 @pytest.fixture

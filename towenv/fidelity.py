@@ -102,7 +102,7 @@ SAFETY_SLACK = 2.5
 #: reduced below the scene's, and without a pilot the fine default is returned
 FLOW_MARGIN = 2.0
 #: growth rate (1/s) above which a lateral mode of the linearised model counts as unstable; such a mode grows
-#: from round-off in the 3-D simulator (at the predicted rate, tests/test_linear.py) and 2-D is refused. At
+#: from round-off in the 3-D simulator (at the predicted rate, tests/unit/test_linear.py) and 2-D is refused. At
 #: 1e-3/s it would need ~10 h of simulated time to grow from round-off to a visible amplitude
 LATERAL_GROWTH_LIMIT = 1e-3
 #: simulated seconds of the statistics window of the pilot run that checks a chosen configuration
@@ -114,7 +114,7 @@ MAX_PILOTS = 8
 #: second iteration, when the error left in the iterate (estimated from the observed contraction) is within the
 #: solver tolerances. At the long steps chosen here it saves 10–25 % of the iterations in head and bow seas
 #: (1–6 % in a following sea or a series tow) and moved the fish statistics by ≤ 0.35 % in 15 measured choices;
-#: at the fine default's 0.01 s it changes nothing (tests/test_newton_stop.py), so the fine default keeps the
+#: at the fine default's 0.01 s it changes nothing (tests/unit/test_newton_stop.py), so the fine default keeps the
 #: plain rule. Not the simulator's default: at very long steps (≥ 0.5 s) it was less
 #: robust (docs/model-notes.md); the choices here are ≤ 0.3 s and each passes a pilot run
 NEWTON_STOP = "estimate"

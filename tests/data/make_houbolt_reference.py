@@ -16,7 +16,7 @@ gyroscopic change, those functions and their two call sites in ``houbolt_step`` 
 ``series_multitow`` changed (by ≤ 4e-12 m in positions, ≤ 5e-9 N in tensions: Newton-tolerance level);
 the three scenes without an aft tow point were reproduced bit for bit.
 
-The attitude test (tests/test_attitude.py) checks that the current kernel reproduces the trajectories bit
+The attitude test (tests/verification/test_attitude.py) checks that the current kernel reproduces the trajectories bit
 for bit when no body re-charts (every body's pitch stays below the re-chart threshold in these runs).
 
 Regenerated a third time, with no change to the recipe above, on the machine CI runs on (an AMD EPYC host,

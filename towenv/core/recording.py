@@ -8,7 +8,7 @@ records in ONE compiled call (:func:`_record_chunk`): for each record it runs ``
 nodes' ``hist_r`` levels, ``hist_ang``, ``body_chart``, ``tens_hist[0]``, ``top_react``; for a heave
 compensator the sheave and ship heights and k, b) into the recorder's preallocated arrays.
 
-The results are bit-identical to the per-record loop (tested, ``tests/test_recording.py``): the kernel is
+The results are bit-identical to the per-record loop (tested, ``tests/unit/test_recording.py``): the kernel is
 called with the same arguments (``batch.kernel_args``), the tow points come from ``Simulator._tow_points``
 (aligned blocks: independent of the chunking) and each record's start time is ``step_count * dt`` as in
 ``Simulator.advance_steps``. Chunks are sized to ~0.2 s of wall time (at most ``MAX_CHUNK_STEPS`` steps),

@@ -7,7 +7,7 @@ tension matrix, scipy's sparse LU instead of the tree elimination). Where the ke
 from model.md — drag evaluated at each end node (trapezoidal rule) instead of at the mean end velocity,
 and the convergence aids of the Newton iteration (implicit body damping, string stiffness, relaxed body
 rotation, tension extrapolation) — the twin follows the kernels' documented choice, since the point is to
-reproduce them. The tests (``tests/test_twin.py``) compare each numba kernel with its twin on random
+reproduce them. The tests (``tests/verification/test_twin.py``) compare each numba kernel with its twin on random
 states. Speed is irrelevant here; clarity is the point.
 
 Conventions (same as the kernels): ``t_s`` is the unit tangent of segment ``s`` from its lower node to

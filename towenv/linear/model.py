@@ -1157,7 +1157,7 @@ class LinearModel:
         the mean flow (the tangent damping ``−∂f/∂v`` at zero oscillation amplitude): ``λ = σ + iω`` (1/s),
         sorted by decreasing growth rate σ, and for each mode the fraction of its displacement energy in the
         lateral plane (node sway, body roll and yaw). ``σ > 0`` is an unstable mode: it grows from any
-        perturbation, round-off included (tests/test_linear.py compares σ with the nonlinear simulator's
+        perturbation, round-off included (tests/unit/test_linear.py compares σ with the nonlinear simulator's
         growth rate)."""
         comp = _comp_param(compensator, self.scene_compensator)
         sel, Kq, Ku, Mq, Mu, Cadd = self._system_for(comp)

@@ -135,7 +135,7 @@ def render(data: dict, path: Path | None = None) -> str:
     L.append(f"* Full report (all cases, {fmt(meta['total_s'])} s on the machine below): `{FULL_CMD}` — runs every case, "
              "writes this file, the figures and the result cache `docs/validation/results.json`.")
     L.append(f"* Re-render this file from the cache without simulating: `{RENDER_CMD}`.")
-    L.append(f"* Quick version (what CI runs, `tests/test_validation.py`): `{QUICK_CMD}` (writes to "
+    L.append(f"* Quick version (what CI runs, `tests/validation/test_validation.py`): `{QUICK_CMD}` (writes to "
              "`out/validation_quick/`); one case: `--cases hover`. From an installed package, `towenv validate` "
              "(or `python -m towenv.validation`) runs the same cases and writes the report under the working "
              "directory: `out/validation/` (`out/validation_quick/` with `--quick`), or `--out DIR`.")

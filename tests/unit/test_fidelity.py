@@ -91,6 +91,7 @@ def test_select_refuses_bad_safety_factors():
             F.select(_deck(), tolerance=0.05, pilot=False, **kw)
 
 
+@pytest.mark.slow
 def test_rules_slack_and_nonlinear_flow():
     # the two-part tow's light secondary goes slack in SS4: segments are not reduced
     ch = F.select("two_part_coastal_ss4", tolerance=0.1)
@@ -152,6 +153,7 @@ def test_pilot_run_rejects_a_step_at_which_the_fish_tumbles():
     assert F.pilot_run(sc, best.overrides())[0]
 
 
+@pytest.mark.slow
 def test_series_tows_are_not_capped_at_short_steps():
     """The series-tow step cap (Δt ≤ 0.02 s) is gone: series_multitow in SS3 gets a step ≥ 0.05 s at 5 %,
     and the pilot confirms it runs without step cuts (body–tail relaxation, docs/model-notes.md)."""
@@ -249,7 +251,7 @@ def test_cli_fidelity(tmp_path):
 
 def test_two_d_refused_when_a_lateral_mode_is_unstable():
     """hover_deep_tow at 2 m/s in a head sea excites nothing laterally, but its towfish has an unstable
-    roll/yaw mode (tests/test_linear.py): the 3-D fine default rolls over after ~150 s, which a 2-D model
+    roll/yaw mode (tests/unit/test_linear.py): the 3-D fine default rolls over after ~150 s, which a 2-D model
     cannot; 2-D is refused and the reason says why. A head-sea conventional tow (stable) still gets 2-D."""
     sea = {"sea": {"code": 5, "convention": "coastal", "heading_deg": 180.0, "seed": 1},
            "vessel.model": "coastal_survey", "vessel.excitation": None}
@@ -259,6 +261,7 @@ def test_two_d_refused_when_a_lateral_mode_is_unstable():
     assert ok.planar and "unstable" not in ok.reason
 
 
+@pytest.mark.slow
 def test_pilot_pruning_keeps_a_loose_tolerance_from_falling_back_to_the_fine_default():
     """hover_deep_tow at 1.5 m/s in SS3 from 150° (a round-5 case): tried one by one, the cheapest candidates'
     pilots all missed the statistics at 10 % and used up the pilots, so 10 % got the fine default while 5 %

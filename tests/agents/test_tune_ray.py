@@ -13,7 +13,9 @@ from pathlib import Path
 
 import pytest
 
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "tune_ray.py"
+from helpers import REPO
+
+SCRIPT = REPO / "scripts" / "tune_ray.py"
 #: the smallest sensible sweep: 256 steps on 2 env copies, one 20 s validation episode at the end
 TINY = ["--algo", "ppo", "--env", "towenv/WinchPayout-v0", "--sea-codes", "3", "--n-timesteps", "256",
         "--eval-freq", "256", "--n-envs", "2", "--eval-episodes", "1", "--env-kwargs", "episode_seconds:20.0",
@@ -65,6 +67,7 @@ def test_dry_run_without_ray_resolves_paths_from_cwd(tmp_path):
     assert sorted(c.split("--seed ")[1].split()[0] for c in cmds) == ["0", "0", "1", "1"]
 
 
+@pytest.mark.slow
 def test_tiny_sweep_on_local_ray(tmp_path):
     pytest.importorskip("ray")
     pytest.importorskip("stable_baselines3")

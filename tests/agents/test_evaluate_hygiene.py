@@ -16,7 +16,7 @@ import pytest
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-REPO = Path(__file__).resolve().parent.parent
+from helpers import REPO
 WINCH = "towenv/WinchPayout-v0"
 COMP = "towenv/CompensatorGains-v0"
 

@@ -17,7 +17,7 @@ import towenv
 from towenv.core.alpha import GeneralizedAlphaSimulator, amplification_matrix, coefficients, principal_root
 from towenv.peer.decks import axial_cfl_step, shared_deck
 
-from conftest import peer_deck
+from helpers import peer_deck
 
 RHO, G = 1025.0, 9.80665
 M_EFF = 500.0 + RHO * 0.1 * 1.0 + 0.5 * 1.0 * 100.0      # body + added mass + half the segment

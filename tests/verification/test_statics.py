@@ -7,7 +7,7 @@ import pytest
 import towenv
 from towenv.verification import closed_forms as cf
 
-from conftest import G, RHO, peer_deck
+from helpers import G, RHO, peer_deck
 
 W = (1.0 - RHO * math.pi * 0.01 ** 2) * G            # peer cable wet weight per metre
 WB = (500.0 - RHO * 0.1) * G                          # peer body wet weight

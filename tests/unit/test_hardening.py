@@ -1,6 +1,6 @@
 """Issue 17 (hardening): every defect found when the project was tried as a careless user would, each with
 a regression test; plus a hypothesis fuzz of the command line. The environment items are in
-tests/test_env_hardening.py, the Ray sweep in tests/test_tune_ray.py."""
+tests/test_env_hardening.py, the Ray sweep in tests/agents/test_tune_ray.py."""
 from __future__ import annotations
 
 import json
@@ -24,7 +24,7 @@ from towenv.core.simulator import load
 from towenv.errors import SimulationDivergence
 from towenv.scene import SceneError
 
-REPO = Path(__file__).resolve().parents[1]
+from helpers import REPO
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from towenv.core import recording
 from towenv.core.run import Recorder, simulate
 from towenv.core.simulator import Simulator, load
 
-from conftest import peer_deck
+from helpers import peer_deck
 
 SEA = {"sea": {"code": 4, "convention": "coastal", "spectrum": "jonswap", "heading_deg": 180.0, "seed": 1},
        "vessel.model": "coastal_survey", "vessel.excitation": None, "vessel.speed": 2.0}

@@ -13,7 +13,7 @@ import towenv
 from towenv.peer import moordyn_input, require_moordyn
 from towenv.peer.moordyn_runner import MoorDynUnsupported, towenv_axial_damping_ratio
 
-from conftest import G, RHO, peer_deck
+from helpers import G, RHO, peer_deck
 
 
 def test_input_file_translates_the_deck():

@@ -57,7 +57,7 @@ def test_planar_and_pitch_only_models_reproduce_the_3d_model_on_a_planar_scene(s
 
 @pytest.mark.parametrize("mode", ["planar", "pitch_only"])
 def test_reduced_houbolt_step_matches_twin(mode):
-    from test_twin import EXCITATION, SCENES, _simulator, kernel_and_twin_step
+    from twin_cases import EXCITATION, SCENES, _simulator, kernel_and_twin_step
 
     d = SCENES["two_part"](excitation=EXCITATION)
     if mode == "planar":

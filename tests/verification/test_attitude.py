@@ -27,18 +27,17 @@ from towenv.core import kernels as K
 from towenv.core import twin
 from towenv.core.simulator import physical_attitude, quaternion_from_rotation
 
-DATA = Path(__file__).parent / "data"
+from helpers import DATA
 
 
 # ----------------------------------------------------------------------------------------------
 # bit-identity with the pre-chart kernel
 # ----------------------------------------------------------------------------------------------
 def _reference_cases():
-    sys.path.insert(0, str(DATA))
-    try:
-        import make_houbolt_reference as ref
-    finally:
-        sys.path.pop(0)
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("make_houbolt_reference", DATA / "make_houbolt_reference.py")
+    ref = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ref)
     return ref
 
 
@@ -140,10 +139,10 @@ def test_euler_from_rotation_round_trip_and_gimbal_lock():
 
 def test_houbolt_step_from_a_recharted_state_matches_twin():
     """Series tow (aft tow points carried by their bodies): re-chart every body to a random chart, then one
-    kernel step equals the twin's step (1e-9, as in tests/test_twin.py), and equals the step taken without
+    kernel step equals the twin's step (1e-9, as in tests/verification/test_twin.py), and equals the step taken without
     re-charting to within the scheme's local error (the two charts are two coordinate systems of the same
     attitude)."""
-    from test_twin import EXCITATION, SCENES, _simulator, kernel_and_twin_step
+    from twin_cases import EXCITATION, SCENES, _simulator, kernel_and_twin_step
 
     sim = _simulator(SCENES["series"](excitation=EXCITATION))
     sim.advance(2.0)

@@ -7,7 +7,7 @@ import pytest
 import towenv
 from towenv.verification import closed_forms as cf
 
-from conftest import RHO, peer_deck
+from helpers import RHO, peer_deck
 
 M_EFF = 500.0 + RHO * 0.1
 

@@ -9,7 +9,7 @@ import towenv
 from towenv.core.modal import natural_frequencies
 from towenv.verification import closed_forms as cf
 
-from conftest import G, RHO, peer_deck
+from helpers import G, RHO, peer_deck
 
 M_EFF = 500.0 + RHO * 0.1          # body + added mass along the line (C_a = 1)
 

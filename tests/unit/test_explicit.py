@@ -6,7 +6,7 @@ import pytest
 import towenv
 from towenv.core.explicit import ExplicitSimulator
 
-from conftest import peer_deck
+from helpers import peer_deck
 
 
 @pytest.mark.parametrize("scheme,dt,zeta", [("euler", 8e-4, 0.1), ("rk2", 8e-4, 0.3), ("rk4", 1.6e-3, 0.1)])

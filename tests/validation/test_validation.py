@@ -8,6 +8,8 @@ import math
 
 import pytest
 
+pytestmark = pytest.mark.slow          # the quick validation report takes ~30 s
+
 from towenv.scene import load_scene
 from towenv.validation import report
 from towenv.validation.common import amplitude, fmt, run_scene

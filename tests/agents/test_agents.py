@@ -19,7 +19,7 @@ pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("yaml")          # rl-zoo YAML hyperparameters (PyYAML; should be in the `rl` extra)
 
-REPO = Path(__file__).resolve().parent.parent
+from helpers import REPO
 
 import gymnasium as gym  # noqa: E402
 
@@ -149,6 +149,7 @@ def test_hyperparameter_files_parse():
 
 
 # ---------------------------------------------------------------------------------------- train + evaluate
+@pytest.mark.slow
 def test_smoke_train_resume_and_evaluate(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     train = _script("train")

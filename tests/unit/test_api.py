@@ -7,7 +7,7 @@ import pytest
 import towenv
 from towenv.core.excitation import TowPointPath
 
-from conftest import peer_deck
+from helpers import peer_deck
 
 
 def test_simulate_result_save_load_roundtrip(tmp_path):
