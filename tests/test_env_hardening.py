@@ -23,6 +23,7 @@ from hypothesis import strategies as st  # noqa: E402
 import towenv.envs  # noqa: E402,F401  (registers the ids)
 from towenv.envs.checks import ActionError, ConfigError, ResetNeeded  # noqa: E402
 from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
+from towenv.envs.pieces import Limits, PartedOrGrounded  # noqa: E402
 from towenv.envs.vector import CompensatorGainsVectorEnv, WinchPayoutVectorEnv  # noqa: E402
 from towenv.envs.winch import WinchPayoutEnv  # noqa: E402
 from towenv.sea import SeaState  # noqa: E402
@@ -215,6 +216,14 @@ def test_vector_env_actions_validated():
 
 
 # ======================================================================================== item 12
+class _BadLimits:
+    """A termination piece whose ``limits`` are not :class:`~towenv.envs.pieces.Limit` objects."""
+    limits = ("tension_ratio >= 1",)
+
+    def __call__(self, m):
+        return None
+
+
 BAD_KWARGS = [
     ({"breaking_load": 0.0}, "breaking_load"), ({"breaking_load": -5.0}, "breaking_load"),
     ({"breaking_load": {"primary": 0.0}}, "breaking_load"), ({"breaking_load": {"tether": 1e5}}, "breaking_load"),
@@ -240,7 +249,8 @@ BAD_KWARGS = [
     ({"sim_overrides": {"nope": 1}}, "sim_overrides"), ({"sim_overrides": [1]}, "sim_overrides"),
     ({"scene_overrides": {"nope": 1}}, "scene_overrides"), ({"scene": "nope"}, "scene"), ({"scene": 3}, "scene"),
     ({"fidelity": 2.0}, "fidelity"), ({"render_mode": "ascii"}, "render_mode"), ({"mru_delay": True}, "mru_delay"),
-    ({"mean_time_constant": 0.0}, "mean_time_constant"),
+    ({"mean_time_constant": 0.0}, "mean_time_constant"), ({"termination": 3}, "termination"),
+    ({"termination": _BadLimits()}, "termination"),
 ]
 BAD_WINCH = [({"winch_class": ["standard"]}, "winch_class"), ({"winch_class": "huge"}, "winch_class"),
              ({"winch_max_speed": 0.0}, "winch_max_speed"),
@@ -363,6 +373,7 @@ KWARGS = {
     "mean_time_constant": (st.one_of(st.none(), _num(0.1, 100.0)), st.sampled_from([0.0, -1.0, float("inf"), "x"])),
     "fidelity": (st.none(), st.sampled_from([0.0, 1.0, float("nan"), "high"])),
     "render_mode": (st.sampled_from([None, "rgb_array"]), st.sampled_from(["ascii", 1])),
+    "termination": (st.sampled_from([None, Limits(), PartedOrGrounded(50.0)]), st.sampled_from([3, "floor", _BadLimits()])),
 }
 WINCH_KWARGS = {
     "winch_class": (st.sampled_from(["standard", "high_performance"]), st.sampled_from(["huge", None, 1])),

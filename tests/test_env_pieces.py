@@ -22,7 +22,9 @@ import pytest
 gym = pytest.importorskip("gymnasium")
 
 import towenv.envs  # noqa: E402,F401  (registers the ids)
+from towenv.envs.checks import ConfigError  # noqa: E402
 from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
+from towenv.envs.pieces import Limit, Limits, PartedOrGrounded, Termination  # noqa: E402
 from towenv.envs.winch import WinchPayoutEnv  # noqa: E402
 
 #: tests/data/env_reference.npz (looked up from this file's folder upwards, so the test can move into a sub-folder)
@@ -91,26 +93,28 @@ def _uniform(n, dim, seed):
 
 
 def reference_cases(termination=None):
-    """{case: {array name: array}}. ``termination`` (a piece) is passed to every environment when given."""
-    kw = {} if termination is None else {"termination": termination}
+    """{case: {array name: array}}. ``termination``: None (the environments' default) or a factory
+    ``termination(floor_depth, body)`` of the piece passed to every environment (with each case's floor)."""
+    def kw(floor_depth=80.0):
+        return {} if termination is None else {"termination": termination(floor_depth, "fish")}
     out = {}
-    out["comp"] = _rollout(CompensatorGainsEnv(**kw), _uniform(120, 2, 10), seed=0)
+    out["comp"] = _rollout(CompensatorGainsEnv(**kw()), _uniform(120, 2, 10), seed=0)
     out["comp_noise_delay_eval"] = _rollout(
-        CompensatorGainsEnv(sensor_noise={"fish_heave_dev": 0.01, "top_tension": 0.02}, obs_delay=2, **kw),
+        CompensatorGainsEnv(sensor_noise={"fish_heave_dev": 0.01, "top_tension": 0.02}, obs_delay=2, **kw()),
         _uniform(80, 2, 11), seed=5, options={"eval_index": 3})
     payout = np.concatenate([np.full((100, 1), 0.8, np.float32), _uniform(100, 1, 12)])   # pays out: remeshes
-    out["winch_remesh"] = _rollout(WinchPayoutEnv(**kw), payout, seed=1)
+    out["winch_remesh"] = _rollout(WinchPayoutEnv(**kw()), payout, seed=1)
     out["winch_preview"] = _rollout(
         WinchPayoutEnv(observations=("tow_vel_along", "time_left", "wave_preview", "last_action", "fish_heave_dev"),
-                       preview_distances=(10.0, 30.0), mru_delay=0.1, mean_time_constant=None, **kw),
+                       preview_distances=(10.0, 30.0), mru_delay=0.1, mean_time_constant=None, **kw()),
         _uniform(60, 1, 13), seed=2)
-    out["floor"] = _rollout(CompensatorGainsEnv(floor_depth=30.0, **kw), _uniform(3, 2, 14), seed=0)
-    out["parted"] = _rollout(WinchPayoutEnv(breaking_load=1000.0, **kw), _uniform(3, 1, 15), seed=0)
-    fail = CompensatorGainsEnv(dt=0.5, control_hz=2.0, sim_overrides={"max_step_cuts": 0}, **kw)
+    out["floor"] = _rollout(CompensatorGainsEnv(floor_depth=30.0, **kw(30.0)), _uniform(3, 2, 14), seed=0)
+    out["parted"] = _rollout(WinchPayoutEnv(breaking_load=1000.0, **kw()), _uniform(3, 1, 15), seed=0)
+    fail = CompensatorGainsEnv(dt=0.5, control_hz=2.0, sim_overrides={"max_step_cuts": 0}, **kw())
     out["failure"] = _rollout(fail, np.zeros((120, 2), np.float32), seed=0, options={"eval_index": 0})
-    out["vector_winch"] = _vector_rollout("towenv/WinchPayout-v0", 3, 70, seed=7, episode_seconds=3.0, **kw)
+    out["vector_winch"] = _vector_rollout("towenv/WinchPayout-v0", 3, 70, seed=7, episode_seconds=3.0, **kw())
     out["vector_comp"] = _vector_rollout("towenv/CompensatorGains-v0", 2, 40, seed=8, floor_depth=None,
-                                         breaking_load={"secondary": 69.0}, **kw)
+                                         breaking_load={"secondary": 69.0}, **kw(None))
     return out
 
 
@@ -174,3 +178,121 @@ def test_kernel_data_runs_the_kernel_as_advance_steps_does():
     np.testing.assert_array_equal(a.counters[:2], b.counters[:2])
     exc = kd.divergence(K.FAIL_NAN, -1, 0.0, 1.0)
     assert exc.time == 1.0 and "non-finite" in str(exc)
+
+
+
+# ----------------------------------------------------------------------------------------------------
+# termination
+# ----------------------------------------------------------------------------------------------------
+class _DictOnly(Termination):
+    """A piece with only the dict protocol (no compiled ``limits``): asked at every step for every copy."""
+
+    def __init__(self, inner):
+        self.inner = inner
+        self.calls = 0
+        self.keys = set()
+
+    def __call__(self, m):
+        self.calls += 1
+        self.keys |= set(m)
+        return self.inner(m)
+
+
+def test_default_termination_is_parted_or_grounded_from_floor_depth_and_body():
+    env = CompensatorGainsEnv(floor_depth=55.0, body="depressor")
+    assert isinstance(env.termination, PartedOrGrounded)
+    assert (env.termination.floor_depth, env.termination.body) == (55.0, "depressor")
+    assert [(x.key, x.op, x.value) for x in env.termination.limits] == [("tension_ratio", ">=", 1.0),
+                                                                          ("fish_depth", ">", 55.0)]
+    assert [x.key for x in WinchPayoutEnv(floor_depth=None).termination.limits] == ["tension_ratio"]
+
+
+def test_explicit_and_dict_path_terminations_reproduce_the_reference():
+    """The default piece passed explicitly (compiled limits) and the same decision through the dict path
+    (asked every step, ``m["overloaded"]`` naming the lines) give the reference trajectories and reasons."""
+    _assert_matches_reference(reference_cases(lambda fd, body: PartedOrGrounded(fd, body)))
+    made = []
+
+    def dict_only(fd, body):
+        made.append(_DictOnly(PartedOrGrounded(fd, body)))
+        return made[-1]
+    _assert_matches_reference(reference_cases(dict_only))
+    assert all(p.calls > 0 for p in made)
+    assert {"tension_ratio", "fish_depth", "overloaded", "last_action"} <= made[0].keys
+
+
+def test_custom_limits_end_the_episode_with_their_reason_and_the_terminal_cost():
+    piece = Limits(Limit("fish_heave_dev", ">", 0.02, "heave_too_large"),
+                   Limit("fish_heave_dev", "<", -0.02, "heave_too_large"))
+    env = WinchPayoutEnv(termination=piece)
+    assert env.termination is piece
+    env.reset(seed=0, options={"eval_index": 8})
+    for k in range(600):
+        _, r, te, tr, info = env.step(np.array([0.0], np.float32))
+        if te or tr:
+            break
+    m = env._last_m
+    assert te and not tr and abs(m["fish_heave_dev"]) > 0.02
+    assert info["termination"].startswith("heave_too_large: fish_heave_dev = ")
+    assert info["reward_components"]["terminal"] == pytest.approx(2.0 * (env.max_steps - (k + 1) + 1))
+    # the floor of the default piece no longer applies
+    env = CompensatorGainsEnv(floor_depth=30.0, termination=Limits())
+    env.reset(seed=0)
+    out = [env.step(env.action_space.sample()) for _ in range(5)]
+    assert not any(o[2] for o in out)
+    # a vector environment asks the same piece of every copy
+    venv = gym.make_vec("towenv/WinchPayout-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                        termination=Limits(Limit("t", ">=", 0.5, "long_enough")))
+    venv.reset(seed=0)
+    for _ in range(5):
+        _, _, te, _, info = venv.step(np.zeros((2, 1), np.float32))
+    assert te.all() and list(info["termination"]) == ["long_enough: t = 0.5 >= 0.5"] * 2
+    venv.close()
+
+
+def test_custom_dict_termination_is_asked_every_step():
+    class AfterOneSecond:
+        def __init__(self):
+            self.seen = []
+
+        def __call__(self, m):
+            self.seen.append(m["t"])
+            return "one_second" if m["t"] >= 1.0 - 1e-9 else None
+
+    piece = AfterOneSecond()
+    env = CompensatorGainsEnv(termination=piece)
+    env.reset(seed=0)
+    flags = [env.step(env.action_space.sample()) for _ in range(10)]
+    assert [f[2] for f in flags] == [False] * 9 + [True] and flags[-1][4]["termination"] == "one_second"
+    assert piece.seen == pytest.approx([0.1 * (k + 1) for k in range(10)])
+    # a truthy non-str verdict ends the episode too, named by the piece (its __name__ or class name)
+    env = CompensatorGainsEnv(termination=lambda m: m["t"] > 0.15)
+    env.reset(seed=0)
+    assert not env.step(env.action_space.sample())[2]
+    _, _, te, _, info = env.step(env.action_space.sample())
+    assert te and info["termination"] == "<lambda>"
+
+
+class _BadLimits:
+    limits = ("tension_ratio >= 1",)
+
+    def __call__(self, m):
+        return None
+
+
+@pytest.mark.parametrize("bad", [3, "floor", _BadLimits()])
+def test_bad_termination_raises_config_error(bad):
+    with pytest.raises(ConfigError, match="termination"):
+        WinchPayoutEnv(termination=bad)
+
+
+@pytest.mark.parametrize("kw", [dict(key="depth", op=">", value=1.0, reason="x"),
+                                dict(key="fish_depth", op="=>", value=1.0, reason="x"),
+                                dict(key="fish_depth", op=">", value=float("nan"), reason="x"),
+                                dict(key="fish_depth", op=">", value=True, reason="x"),
+                                dict(key="fish_depth", op=">", value=1.0, reason="")])
+def test_bad_limit_raises(kw):
+    with pytest.raises(ValueError, match="Limit"):
+        Limit(**kw)
+    with pytest.raises(ValueError, match="floor_depth"):
+        PartedOrGrounded(-1.0)

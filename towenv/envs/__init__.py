@@ -39,6 +39,7 @@ _LAZY = {
     "TowSB3VecEnv": ".sb3",
     "Observer": ".pieces", "CHANNELS": ".pieces", "RandomCodeSeas": ".pieces", "FixedSeas": ".pieces",
     "HeavePitchReward": ".pieces", "HeaveOnlyReward": ".pieces", "default_eval_sea_states": ".pieces",
+    "Termination": ".pieces", "Limit": ".pieces", "Limits": ".pieces", "PartedOrGrounded": ".pieces",
     "ConfigError": ".checks", "ActionError": ".checks", "ResetNeeded": ".checks",
 }
 

@@ -27,7 +27,8 @@ from ..sea.spectra import _CONVENTIONS as SEA_CONVENTIONS
 from . import checks as C
 from . import measurements as MS
 from . import stepper as ST
-from .pieces import CHANNELS, HeavePitchReward, Observer, RandomCodeSeas, default_eval_sea_states
+from .pieces import (CHANNELS, LIMIT_OPS, HeavePitchReward, Limit, Observer, PartedOrGrounded, RandomCodeSeas,
+                     default_eval_sea_states)
 
 __all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD", "EnvRows", "RESET_OPTIONS", "MAX_OBS_DELAY"]
 
@@ -63,10 +64,12 @@ class TowEnv(gym.Env):
         units), delay in control steps, wave-preview distances (m ahead), or a whole custom observer.
     reward_weights, reward_fn, slack_tension, over_tension_fraction
         Weights of :class:`~towenv.envs.pieces.HeavePitchReward` or a replacement ``RewardFn``.
-    breaking_load, floor_depth
-        Breaking loads (N; float for every line or ``{line: N or None}``) and the floor depth (m) of the towed
-        body: exceeding either *terminates* the episode. ``breaking_load=None`` means
-        :data:`DEFAULT_BREAKING_LOAD` (``{}`` = no limit); ``floor_depth=None`` disables the floor.
+    breaking_load, floor_depth, termination
+        Breaking loads (N; float for every line or ``{line: N or None}``; the ``tension_ratio`` measurement)
+        and the floor depth (m) of the towed body: by default (:class:`~towenv.envs.pieces.PartedOrGrounded`)
+        exceeding either *terminates* the episode. ``breaking_load=None`` means :data:`DEFAULT_BREAKING_LOAD`
+        (``{}`` = no limit); ``floor_depth=None`` disables the floor. ``termination`` replaces the default
+        piece (a :class:`~towenv.envs.pieces.Termination`; ``floor_depth`` is then unused).
     body, sim_overrides, render_mode
         Towed body scored (default ``"fish"``), solver overrides passed to ``Simulator`` (e.g.
         ``{"max_step_cuts": 0}``), ``"rgb_array"`` or ``"human"``.
@@ -95,6 +98,7 @@ class TowEnv(gym.Env):
                  reward_weights: Mapping[str, float] | None = None, reward_fn=None,
                  slack_tension: float = 1.0, over_tension_fraction: float = 0.5,
                  breaking_load: float | Mapping[str, float] | None = None, floor_depth: float | None = 80.0,
+                 termination=None,
                  body: str = "fish", sim_overrides: Mapping[str, Any] | None = None,
                  fidelity: float | None = None, render_mode: str | None = None,
                  mru_delay: float = 0.0, mean_time_constant: float | None = 30.0):
@@ -177,6 +181,7 @@ class TowEnv(gym.Env):
         self.cable_line = cable_line
         self.body = body
         self.floor_depth = floor_depth
+        self.termination = termination if termination is not None else PartedOrGrounded(floor_depth, body)
         if breaking_load is None:
             breaking_load = DEFAULT_BREAKING_LOAD
         self.breaking_load = breaking_load
@@ -630,16 +635,42 @@ class TowEnv(gym.Env):
         ramp = float(sim.path.ramp(np.array([t]))[0])
         return ramp * np.asarray(sim.wave.elevation(np.full(d.size, t), xr, yr), float).reshape(d.size)
 
-    def _terminal_reason(self, row) -> str:
-        """Why a copy whose measurement row met a termination condition terminated."""
-        if row[MS.M_T_RATIO] >= 1.0:
-            _, top_inv, lines = self._tension_layout(self.sim)
-            T = self.sim.tensions
-            which = [n for n, segs, k in lines if segs.size and float(T[segs].max()) * k >= 1.0]
-            if self.sim.top_tension * top_inv >= 1.0:
-                which.append("tow point")
-            return f"cable_parted: tension above the breaking load ({', '.join(dict.fromkeys(which))})"
-        return f"{self.body}_below_floor: depth {row[MS.M_DEPTH]:.1f} m > {self.floor_depth:g} m"
+    # ------------------------------------------------------------------ termination
+    @property
+    def termination(self):
+        """The termination piece (:class:`~towenv.envs.pieces.Termination`); assigning one checks it."""
+        return self._termination
+
+    @termination.setter
+    def termination(self, piece):
+        self._termination, self._limits = piece, _limit_arrays(type(self).__name__, piece)
+
+    def _overloaded(self, sim) -> tuple:
+        """Names of the lines (and ``"tow point"``) of ``sim`` at or above their breaking load."""
+        _, top_inv, lines = self._tension_layout(sim)
+        T = sim.tensions
+        which = [n for n, segs, k in lines if segs.size and float(T[segs].max()) * k >= 1.0]
+        if sim.top_tension * top_inv >= 1.0:
+            which.append("tow point")
+        return tuple(dict.fromkeys(which))
+
+    def _termination_dict(self, row, action, preview=None) -> dict:
+        """The measurement dict handed to the termination piece: :meth:`_row_dict` and ``overloaded``."""
+        m = self._row_dict(row, action, preview)
+        m["overloaded"] = self._overloaded(self.sim) if row[MS.M_T_RATIO] >= 1.0 else ()
+        return m
+
+    def _ended(self, row, action, preview=None):
+        """The termination piece's verdict on a measurement row: the reason (str) or None."""
+        piece = self._termination
+        r = piece(self._termination_dict(row, action, preview))
+        if r is None or r is False:
+            return None
+        if isinstance(r, str):
+            return r
+        if not r:
+            return None
+        return getattr(piece, "__name__", None) or type(piece).__name__
 
     # ------------------------------------------------------------------ rendering / pickling
     def render(self):
@@ -770,14 +801,24 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
         names = None
     term = np.empty(len(idx), bool)
     trunc = np.empty(len(idx), bool)
-    fd = e0.floor_depth
-    nterm = _post_rows(M, refs, A, rows.prev_action, idx, -1.0 if fd is None else float(fd), fd is not None, R,
-                       term, trunc)
+    lim = e0._limits                                # compiled limits of the termination piece, or None
+    nterm = _post_rows(M, refs, A, rows.prev_action, idx, *(lim if lim is not None else _NO_LIMITS), R, term, trunc)
     reasons, tcs = {}, {}
+    if lim is None:                                 # a piece without limits: asked for every copy
+        for k, (e, i) in enumerate(zip(envs, idx)):
+            why = e._ended(M[i], A[i], None if P is None else P[i])
+            if why is not None:
+                term[k] = True
+                reasons[k] = why
+        nterm = len(reasons)
     if nterm:
         for k in np.flatnonzero(term):
             e = envs[k]
-            reasons[int(k)] = e._terminal_reason(M[idx[k]])
+            if int(k) not in reasons:               # met a compiled limit: the piece names the reason
+                i = idx[k]
+                pv = None if P is None else P[i]
+                reasons[int(k)] = e._ended(M[i], A[i], pv) or _limit_reason(e.termination,
+                                                                              e._termination_dict(M[i], A[i], pv))
             tc = float(e.reward_fn.terminal_cost(e.max_steps - int(refs[idx[k], MS.R_STEPS])))
             tcs[int(k)] = tc
             R[k] -= tc
@@ -794,13 +835,52 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
     return res
 
 
+def _limit_arrays(owner, piece):
+    """``(columns, ops, values)`` arrays of a termination piece's ``limits`` (None without limits); checks the
+    piece (:class:`~towenv.envs.checks.ConfigError`)."""
+    if not callable(piece):
+        raise C.ConfigError(f"{owner}: termination must be callable, term(m) -> reason (str) or None (a "
+                            f"towenv.envs.pieces.Termination), or None (PartedOrGrounded(floor_depth)) "
+                            f"(got {piece!r})")
+    lims = getattr(piece, "limits", None)
+    if lims is None:
+        return None
+    if isinstance(lims, (str, bytes, Mapping)) or not C._iterable(lims) \
+            or not all(isinstance(x, Limit) for x in lims):
+        raise C.ConfigError(f"{owner}: termination.limits must be None or a sequence of towenv.envs.pieces.Limit "
+                            f"(got {lims!r})")
+    lims = tuple(lims)
+    return (np.array([MS.COL[x.key] for x in lims], np.int64), np.array([LIMIT_OPS.index(x.op) for x in lims], np.int64),
+            np.array([x.value for x in lims], float))
+
+
+_NO_LIMITS = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
+
+
+def _limit_reason(piece, m) -> str:
+    """The first met limit of ``piece`` as a reason (when the piece's own call gives none)."""
+    for x in getattr(piece, "limits", None) or ():
+        if x.met(float(m[x.key])):
+            return f"{x.reason}: {x.key} = {float(m[x.key]):g} {x.op} {x.value:g}"
+    return type(piece).__name__
+
+
 @njit(cache=True)
-def _post_rows(M, refs, A, PA, idx, floor, has_floor, R, term, trunc):
-    """Termination / time-limit flags of rows idx, non-finite rewards -> -1e6, previous action <- action."""
+def _post_rows(M, refs, A, PA, idx, lcol, lop, lval, R, term, trunc):
+    """Termination flags of rows idx from the limits (column lcol[j] compared by lop[j] — an index of
+    ``LIMIT_OPS`` — to lval[j]; NaN meets none), time-limit flags, non-finite rewards -> -1e6, previous
+    action <- action."""
     nterm = 0
     for k in range(idx.shape[0]):
         b = idx[k]
-        t = M[b, MS.M_T_RATIO] >= 1.0 or (has_floor and M[b, MS.M_DEPTH] > floor)
+        t = False
+        for j in range(lcol.shape[0]):
+            x = M[b, lcol[j]]
+            o = lop[j]
+            v = lval[j]
+            if (o == 0 and x >= v) or (o == 1 and x > v) or (o == 2 and x <= v) or (o == 3 and x < v):
+                t = True
+                break
         term[k] = t
         nterm += t
         trunc[k] = refs[b, MS.R_STEPS] >= refs[b, MS.R_MAXSTEPS]

@@ -1,12 +1,16 @@
 """Swappable pieces of the towenv environments (Jumanji-style strategy objects).
 
-A :class:`~towenv.envs.base.TowEnv` is assembled from three small, picklable objects, each replaceable
+A :class:`~towenv.envs.base.TowEnv` is assembled from four small, picklable objects, each replaceable
 through a constructor keyword:
 
 * ``sea_generator`` — a :class:`SeaGenerator`: ``gen(rng) -> (SeaState, wave_seed)``, the initial-state
   distribution of an episode (the sea state and the random seed of its wave realisation);
 * ``reward_fn`` — a :class:`RewardFn`: ``fn(m, action, prev_action) -> (reward, components)``;
-* ``observation_fn`` — an :class:`Observer`: named sensor channels with noise and delay.
+* ``observation_fn`` — an :class:`Observer`: named sensor channels with noise and delay;
+* ``termination`` — a :class:`Termination`: ``term(m) -> reason or None``, when an episode ends for good
+  (default :class:`PartedOrGrounded`: the cable parts or the towed body goes below the floor).
+
+(The fifth, ``renderer``, draws frames: :class:`towenv.envs.render.SideViewer` by default.)
 
 None of these imports gymnasium; they only see plain floats and numpy arrays.
 
@@ -30,6 +34,7 @@ __all__ = [
     "MEASUREMENTS", "Channel", "CHANNELS", "Observer",
     "SeaGenerator", "RandomCodeSeas", "FixedSeas", "default_eval_sea_states",
     "RewardFn", "HeavePitchReward", "HeaveOnlyReward",
+    "Termination", "Limit", "Limits", "PartedOrGrounded", "LIMIT_OPS",
     "HEAVE_RATE_LIMIT", "PITCH_RATE_LIMIT",
 ]
 
@@ -537,3 +542,102 @@ class HeaveOnlyReward(HeavePitchReward):
         base = dict(pitch=0.0, pitch_rate=0.0, rate_over=0.0)
         base.update(weights or {})
         super().__init__(base, **kw)
+
+
+# =====================================================================================================
+# Termination
+# =====================================================================================================
+#: comparison operators of a :class:`Limit` (``measurement <op> value`` ends the episode)
+LIMIT_OPS = (">=", ">", "<=", "<")
+
+
+@dataclass(frozen=True)
+class Limit:
+    """One terminal condition on a measurement column: the episode ends when ``m[key] <op> value`` (a NaN
+    reading meets no limit). ``key`` is a column of :data:`~towenv.envs.measurements.MEAS_COLUMNS`, ``op``
+    one of :data:`LIMIT_OPS`, ``reason`` the name reported in ``info["termination"]``."""
+    key: str
+    op: str
+    value: float
+    reason: str
+
+    def __post_init__(self):
+        if self.key not in COL:
+            raise ValueError(f"Limit: key {self.key!r} is not a measurement column; columns: {sorted(COL)}")
+        if self.op not in LIMIT_OPS:
+            raise ValueError(f"Limit: op must be one of {list(LIMIT_OPS)} (got {self.op!r})")
+        v = self.value
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(float(v)):
+            raise ValueError(f"Limit: value must be a finite number (got {v!r})")
+        if not isinstance(self.reason, str) or not self.reason:
+            raise ValueError(f"Limit: reason must be a non-empty str (got {self.reason!r})")
+        object.__setattr__(self, "value", float(v))
+
+    def met(self, x: float) -> bool:
+        v = self.value
+        return {">=": x >= v, ">": x > v, "<=": x <= v, "<": x < v}[self.op]
+
+
+class Termination:
+    """Protocol: ``term(m) -> reason or None``: why the episode ends for good at measurement ``m`` (a str,
+    reported as ``info["termination"]``; the reward function's ``terminal_cost`` is charged), or None while
+    it goes on. Truncation (``episode_seconds``, numerical failure) is the environment's, not the piece's.
+
+    ``limits``: None, or a tuple of :class:`Limit` making the same decision as thresholds on measurement
+    columns. The environment then evaluates them compiled, for all copies of a vector environment at once,
+    and calls ``term(m)`` only for a copy that ends (for its reason); without limits it calls ``term(m)``
+    for every copy at every step (``m`` as for the reward, plus ``m["overloaded"]``: the lines, and
+    ``"tow point"``, at or above their breaking load). A piece is shared by the copies of a vector
+    environment: keep it stateless."""
+
+    limits: tuple[Limit, ...] | None = None
+
+    def __call__(self, m) -> str | None:  # pragma: no cover
+        raise NotImplementedError
+
+
+class Limits(Termination):
+    """The episode ends when any of ``limits`` (:class:`Limit`) is met; the reason is the first met limit's
+    ``reason: key = reading``. ``Limits()`` never terminates."""
+
+    def __init__(self, *limits: Limit):
+        for lim in limits:
+            if not isinstance(lim, Limit):
+                raise ValueError(f"Limits: every entry must be a towenv.envs.pieces.Limit (got {lim!r})")
+        self.limits = tuple(limits)
+
+    def __call__(self, m):
+        for lim in self.limits:
+            x = float(m[lim.key])
+            if lim.met(x):
+                return f"{lim.reason}: {lim.key} = {x:g} {lim.op} {lim.value:g}"
+        return None
+
+
+class PartedOrGrounded(Limits):
+    """The default termination: the cable parts — the largest tension / breaking load over all lines and
+    the tow point reaches 1 (``tension_ratio >= 1``; the loads are the environment's ``breaking_load``) — or
+    the towed body goes below the floor (``fish_depth > floor_depth``; ``floor_depth=None``: no floor).
+    ``body`` names the body in the reason (``"fish_below_floor: depth 39.9 m > 30 m"``)."""
+
+    def __init__(self, floor_depth: float | None = 80.0, body: str = "fish"):
+        if floor_depth is not None and (isinstance(floor_depth, bool) or not isinstance(floor_depth, (int, float))
+                                        or not math.isfinite(floor_depth) or floor_depth <= 0):
+            raise ValueError(f"PartedOrGrounded: floor_depth must be a finite number > 0 m or None (no floor) "
+                             f"(got {floor_depth!r})")
+        self.floor_depth = None if floor_depth is None else float(floor_depth)
+        self.body = str(body)
+        lims = [Limit("tension_ratio", ">=", 1.0, "cable_parted")]
+        if self.floor_depth is not None:
+            lims.append(Limit("fish_depth", ">", self.floor_depth, f"{self.body}_below_floor"))
+        super().__init__(*lims)
+
+    def __call__(self, m):
+        if m["tension_ratio"] >= 1.0:
+            which = m.get("overloaded")
+            where = f" ({', '.join(which)})" if which is not None else ""
+            return f"cable_parted: tension above the breaking load{where}"
+        if self.floor_depth is not None and m["fish_depth"] > self.floor_depth:
+            return f"{self.body}_below_floor: depth {m['fish_depth']:.1f} m > {self.floor_depth:g} m"
+        return None
