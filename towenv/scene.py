@@ -35,6 +35,7 @@ from pydantic.functional_validators import PlainValidator
 from pydantic_core import PydanticCustomError
 
 __all__ = [
+    "scene_field",
     "SceneError", "Scene", "Water", "Current", "Vessel", "TurnManoeuvre", "SpeedChangeManoeuvre",
     "SinusoidExcitation", "TimeSeriesExcitation", "Ramp", "Line", "JunctionAttachment", "BodyAttachment",
     "PointBody", "RigidBody", "CoefficientTable", "Solver", "ManoeuvreWindow",
@@ -59,6 +60,17 @@ _INTERNAL = "internal error while validating the scene"
 # =====================================================================================================
 # Error type and formatting
 # =====================================================================================================
+def scene_field(obj, name: str, default=None):
+    """``obj.name`` of a scene model (``obj[name]`` of a mapping; ``default`` for ``None``). The one accessor the
+    core uses to read a validated scene: its defaults are the schema's, ``default`` only stands for a field
+    a model *kind* does not have (e.g. a point body's ``dof``) — never a second copy of a schema default."""
+    if obj is None:
+        return default
+    if isinstance(obj, Mapping):
+        return obj.get(name, default)
+    return getattr(obj, name, default)
+
+
 class SceneError(ValueError):
     """Invalid scene. ``problems`` is a list of ``(dotted_path, message)``; ``str(err)`` lists them all."""
 

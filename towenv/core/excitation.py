@@ -17,10 +17,7 @@ from pathlib import Path
 import numpy as np
 
 
-def _get(obj, name, default=None):
-    if isinstance(obj, dict):
-        return obj.get(name, default)
-    return getattr(obj, name, default)
+from ..scene import scene_field as _get  # noqa: E402  (the one scene accessor; defaults are the schema's)
 
 
 @dataclass
@@ -35,7 +32,9 @@ class _Piece:
 
 
 class Ramp:
-    def __init__(self, kind="half_cosine", duration=12.0):
+    """The scene's start-up ramp (towenv.scene.Ramp: kind and duration) evaluated on time arrays."""
+
+    def __init__(self, kind, duration):
         self.kind = kind
         self.duration = float(duration)
 
@@ -77,16 +76,21 @@ class TowPointPath:
     """Position of the vessel tow point at any time t ≥ 0 (global axes)."""
 
     def __init__(self, vessel=None, base_dir: Path | None = None, default_data_dir: Path | None = None):
-        x0 = np.asarray(_get(vessel, "tow_point", [0.0, 0.0, 0.0]) if vessel is not None else [0, 0, 0], float)
-        speed = float(_get(vessel, "speed", 0.0) or 0.0) if vessel is not None else 0.0
-        heading = math.radians(float(_get(vessel, "heading_deg", 0.0) or 0.0)) if vessel is not None else 0.0
+        from ..scene import Vessel
+        if vessel is None:                      # a path with no vessel: at rest at the origin
+            vessel = Vessel()
+        elif not isinstance(vessel, Vessel):    # a plain mapping: validated, so the defaults are the schema's
+            vessel = Vessel.model_validate(dict(vessel))
+        x0 = np.asarray(vessel.tow_point, float)
+        speed = float(vessel.speed)
+        heading = math.radians(float(vessel.heading_deg))
         self.initial_speed = speed
         self.initial_heading = heading
         self.pieces: list[_Piece] = []
         t, x, psi, v = 0.0, x0.copy(), heading, speed
-        mans = list(_get(vessel, "manoeuvres", []) or []) if vessel is not None else []
-        for man in sorted(mans, key=lambda m: float(_get(m, "start_time", 0.0))):
-            ts = float(_get(man, "start_time", 0.0))
+        mans = list(vessel.manoeuvres)
+        for man in sorted(mans, key=lambda m: float(m.start_time)):
+            ts = float(man.start_time)
             if ts > t:
                 self.pieces.append(_Piece(t, ts, x.copy(), psi, v, 0.0, 0.0))
                 x, psi, v = self._end(self.pieces[-1])
@@ -116,11 +120,11 @@ class TowPointPath:
         self.pieces.append(_Piece(t, math.inf, x.copy(), psi, v, 0.0, 0.0))
         self.starts = np.array([p.t0 for p in self.pieces])
         self.oscillations = []
-        for ex in (_get(vessel, "excitation", []) or []) if vessel is not None else []:
+        for ex in vessel.excitation:
             kind = _get(ex, "type")
             if kind == "sinusoid":
                 self.oscillations.append(Sinusoid(_get(ex, "axis"), _get(ex, "amplitude"), _get(ex, "period"),
-                                                  _get(ex, "phase_deg", 0.0) or 0.0))
+                                                  ex.phase_deg))
             elif kind == "time_series":
                 p = Path(_get(ex, "file"))
                 if not p.is_absolute():
@@ -129,8 +133,8 @@ class TowPointPath:
                 self.oscillations.append(TimeSeries(p))
             else:
                 raise ValueError(f"vessel.excitation: unknown type {kind!r}")
-        ramp = _get(vessel, "ramp") if vessel is not None else None
-        self.ramp = Ramp(_get(ramp, "type", "half_cosine"), _get(ramp, "duration", 12.0)) if ramp is not None else Ramp()
+        ramp = vessel.ramp
+        self.ramp = Ramp(ramp.type, ramp.duration)
 
     @staticmethod
     def _end(p: _Piece):

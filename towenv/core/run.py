@@ -15,9 +15,8 @@ def make_simulator(scene, **overrides) -> Simulator:
     """A simulator for ``scene`` using the time integration named by its ``solver.method``
     (overridable: ``make_simulator(scene, method="rk2")``)."""
     from .simulator import load
-    solver_keys = ("method", "dt", "tolerance", "relative_tolerance", "angle_tolerance", "max_iterations",
-                   "max_step_cuts", "max_strain", "settle_time", "axial_damping_ratio", "rho_inf", "planar",
-                   "newton_stop")
+    from ..scene import Solver
+    solver_keys = tuple(Solver.model_fields)          # the scene schema is the one list of solver settings
     sc = load(scene, {("solver." + k if k in solver_keys else k): v for k, v in overrides.items()}
               if overrides else None)
     method = sc.solver.method

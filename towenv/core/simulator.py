@@ -22,12 +22,7 @@ _CAUSES = {
 }
 
 
-def _get(obj, name, default=None):
-    if obj is None:
-        return default
-    if isinstance(obj, dict):
-        return obj.get(name, default)
-    return getattr(obj, name, default)
+from ..scene import scene_field as _get  # noqa: E402  (the one scene accessor; defaults are the schema's)
 
 
 @dataclass
@@ -48,23 +43,30 @@ class Snapshot:
     chart: np.ndarray | None = None     # per-body attitude chart (None: identity, snapshots of older code)
 
 
+def _scene_default(name):
+    from ..scene import Solver
+    return Solver.model_fields[name].default
+
+
 @dataclass
 class SolverSettings:
-    dt: float = 0.02
-    tolerance: float = 0.5
-    relative_tolerance: float = 1e-5
-    max_iterations: int = 25
-    max_step_cuts: int = 4
-    max_strain: float = 0.2
-    settle_time: float = 0.0
-    angle_tolerance: float = 1e-5
-    tension_solve: str = "tree"
+    """The solver settings the kernels read. Every default is the scene schema's (``towenv.scene.Solver``, the
+    one source), except ``rechart_pitch``, which is not a scene field."""
+    dt: float = _scene_default("dt")
+    tolerance: float = _scene_default("tolerance")
+    relative_tolerance: float = _scene_default("relative_tolerance")
+    max_iterations: int = _scene_default("max_iterations")
+    max_step_cuts: int = _scene_default("max_step_cuts")
+    max_strain: float = _scene_default("max_strain")
+    settle_time: float = _scene_default("settle_time")
+    angle_tolerance: float = _scene_default("angle_tolerance")
+    tension_solve: str = _scene_default("tension_solve")
     # moving attitude chart: a body whose pitch in its chart exceeds this (rad) is re-charted before the
     # next step (docs/model-notes.md "Body attitude"); 0 re-charts every step (most accurate, not
     # bit-identical to the plain Euler-angle runs). Not a scene field: set it on ``Simulator.settings``.
     rechart_pitch: float = K.RECHART_PITCH
-    planar: bool = False
-    newton_stop: str = "change"
+    planar: bool = _scene_default("planar")
+    newton_stop: str = _scene_default("newton_stop")
 
     def array(self):
         if not (0.0 <= self.rechart_pitch <= 1.2):

@@ -145,10 +145,7 @@ def _slope_at_zero(inc, cl):
     return abs((cl[j] - cl[i]) / np.radians(inc[j] - inc[i]))
 
 
-def _get(obj, name, default=None):
-    if isinstance(obj, dict):
-        return obj.get(name, default)
-    return getattr(obj, name, default)
+from ..scene import scene_field as _get  # noqa: E402  (the one scene accessor; defaults are the schema's)
 
 
 def _attachment(end):
@@ -191,11 +188,14 @@ def _span_segments(nseg, spans):
 
 def build_system(scene) -> System:
     """Discretise a validated scene into flat arrays."""
-    water = _get(scene, "water")
-    rho = float(_get(water, "density", 1025.0)) if water is not None else 1025.0
-    g = float(_get(water, "gravity", 9.80665)) if water is not None else 9.80665
-    lines = list(_get(scene, "lines"))
-    bodies = list(_get(scene, "bodies", []) or [])
+    from ..scene import Scene, load_scene
+    if not isinstance(scene, Scene):            # a dict / path / name: validated first, so the schema's
+        scene = load_scene(scene)               # defaults are the only ones
+    water = scene.water
+    rho = float(water.density)
+    g = float(water.gravity)
+    lines = list(scene.lines)
+    bodies = list(scene.bodies)
     body_by_name = {_get(b, "name"): b for b in bodies}
 
     # junctions on each line: distance from the line's top end -> list of child line names
@@ -262,8 +262,8 @@ def build_system(scene) -> System:
         spans = [bounds[i + 1] - bounds[i] for i in range(len(bounds) - 1)]
         counts = (ln.span_segments(cuts) if hasattr(ln, "span_segments")
                   else _span_segments(_get(ln, "segments"), spans))
-        props = (float(_get(ln, "diameter")), float(_get(ln, "mass_per_length")), float(_get(ln, "cn", 1.2)),
-                 float(_get(ln, "ct", 0.01)), float(_get(ln, "can", 1.0)), float(_get(ln, "cat", 0.0)),
+        props = (float(_get(ln, "diameter")), float(_get(ln, "mass_per_length")), float(_get(ln, "cn")),
+                 float(_get(ln, "ct")), float(_get(ln, "can")), float(_get(ln, "cat")),
                  float(_get(ln, "EA")))
         bkind, bref, banchor = _attachment(_get(ln, "bottom"))
         lnodes = [top]
@@ -324,10 +324,9 @@ def build_system(scene) -> System:
         kind = _get(b, "kind")
         if kind in ("ball", "clump"):
             pb_mass[nd] += float(_get(b, "mass"))
-            pb_vol[nd] += float(_get(b, "volume", 0.0))
-            pb_cda[nd] += float(_get(b, "drag_area", 0.0) or 0.0)
-            ca = _get(b, "added_mass_coefficient", 0.5)
-            pb_ca[nd] = float(0.5 if ca is None else ca)
+            pb_vol[nd] += float(b.volume)
+            pb_cda[nd] += float(b.drag_area)
+            pb_ca[nd] = float(b.added_mass_coefficient)
             body_maps.append(BodyMap(name, kind, nd, -1))
             continue
         body_node[ir] = nd
@@ -402,9 +401,8 @@ def current_table(cur):
     return np.zeros(1), v.reshape(1, 3).copy()
 
 
-def _vec(b, name, default):
-    v = _get(b, name)
-    return np.asarray(default if v is None else v, float)
+def _vec(v):
+    return np.asarray(v, float)
 
 
 def _rigid_body_params(b) -> np.ndarray:
@@ -413,20 +411,19 @@ def _rigid_body_params(b) -> np.ndarray:
     20-22 added mass, 23-25 added inertia, 26-28 aft tow point, 29 reduced DOF flag (1: surge/heave/pitch,
     roll and yaw held), 30 tail mass (series tows, set by :func:`tail_masses`)."""
     p = np.zeros(BODY_PARAM)
-    p[0] = float(_get(b, "mass"))
-    p[1] = float(_get(b, "volume", 0.0))
-    p[2] = float(_get(b, "reference_area"))
-    p[3] = float(_get(b, "reference_length"))
-    cg = _vec(b, "cg", [0, 0, 0])
-    p[4:7] = cg
-    p[7:10] = _vec(b, "cb", cg)
-    p[10:13] = _vec(b, "inertia", [1, 1, 1])
-    p[13:16] = _vec(b, "rotational_damping", [0.1, 0.1, 0.1])
-    p[16:19] = _vec(b, "quadratic_rotational_damping", [0.5, 0.5, 0.5])
-    p[20:23] = _vec(b, "added_mass", [0, 0, 0])
-    p[23:26] = _vec(b, "added_inertia", [0, 0, 0])
-    p[26:29] = _vec(b, "aft_tow_point", [0, 0, 0])
-    p[29] = 1.0 if _get(b, "dof", "6dof") == "surge_heave_pitch" else 0.0
+    p[0] = float(b.mass)
+    p[1] = float(b.volume)
+    p[2] = float(b.reference_area)
+    p[3] = float(b.reference_length)
+    p[4:7] = _vec(b.cg)
+    p[7:10] = _vec(b.cb if b.cb is not None else b.cg)              # the schema: cb defaults to cg
+    p[10:13] = _vec(b.inertia)
+    p[13:16] = _vec(b.rotational_damping)
+    p[16:19] = _vec(b.quadratic_rotational_damping)
+    p[20:23] = _vec(b.added_mass)
+    p[23:26] = _vec(b.added_inertia)
+    p[26:29] = _vec(b.aft_tow_point if b.aft_tow_point is not None else (0.0, 0.0, 0.0))   # none: unused
+    p[29] = 1.0 if b.dof == "surge_heave_pitch" else 0.0
     return p
 
 
