@@ -196,7 +196,6 @@ def build_system(scene) -> System:
     g = float(water.gravity)
     lines = list(scene.lines)
     bodies = list(scene.bodies)
-    body_by_name = {_get(b, "name"): b for b in bodies}
 
     # junctions on each line: distance from the line's top end -> list of child line names
     junctions: dict[str, list[float]] = {_get(ln, "name"): [] for ln in lines}
