@@ -250,7 +250,7 @@ BAD_KWARGS = [
     ({"scene_overrides": {"nope": 1}}, "scene_overrides"), ({"scene": "nope"}, "scene"), ({"scene": 3}, "scene"),
     ({"fidelity": 2.0}, "fidelity"), ({"render_mode": "ascii"}, "render_mode"), ({"mru_delay": True}, "mru_delay"),
     ({"mean_time_constant": 0.0}, "mean_time_constant"), ({"termination": 3}, "termination"),
-    ({"termination": _BadLimits()}, "termination"),
+    ({"termination": _BadLimits()}, "termination"), ({"renderer": "side"}, "renderer"),
 ]
 BAD_WINCH = [({"winch_class": ["standard"]}, "winch_class"), ({"winch_class": "huge"}, "winch_class"),
              ({"winch_max_speed": 0.0}, "winch_max_speed"),
@@ -374,6 +374,7 @@ KWARGS = {
     "fidelity": (st.none(), st.sampled_from([0.0, 1.0, float("nan"), "high"])),
     "render_mode": (st.sampled_from([None, "rgb_array"]), st.sampled_from(["ascii", 1])),
     "termination": (st.sampled_from([None, Limits(), PartedOrGrounded(50.0)]), st.sampled_from([3, "floor", _BadLimits()])),
+    "renderer": (st.none(), st.sampled_from(["side", 3])),
 }
 WINCH_KWARGS = {
     "winch_class": (st.sampled_from(["standard", "high_performance"]), st.sampled_from(["huge", None, 1])),

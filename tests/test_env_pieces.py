@@ -1,4 +1,5 @@
-"""The environments' pieces (issue 16, item 5) and the reference trajectories that pin their results.
+"""The environments' pieces (issue 16, item 5): termination and renderer as constructor keywords, the
+simulator's kernel accessor, and the reference trajectories that pin the environments' results.
 
 ``tests/data/env_reference.npz`` holds observations, rewards, flags, reward components and info texts
 of both environments (single, vector, winch remesh, sensor noise and delay, wave preview, termination,
@@ -13,6 +14,7 @@ and the comparison is bit for bit when it matches, to round-off otherwise.
 """
 from __future__ import annotations
 
+import pickle
 import sys
 from pathlib import Path
 
@@ -296,3 +298,74 @@ def test_bad_limit_raises(kw):
         Limit(**kw)
     with pytest.raises(ValueError, match="floor_depth"):
         PartedOrGrounded(-1.0)
+
+
+
+# ----------------------------------------------------------------------------------------------------
+# renderer
+# ----------------------------------------------------------------------------------------------------
+class _Frames:
+    """A renderer: a small frame whose first pixel encodes the simulated time; counts calls and closes."""
+
+    def __init__(self):
+        self.calls = []
+        self.closed = 0
+
+    def __call__(self, env):
+        self.calls.append(env.sim.t)
+        frame = np.zeros((4, 6, 3), np.uint8)
+        frame[0, 0, 0] = int(round(10 * env.sim.t)) % 256
+        return frame
+
+    def close(self):
+        self.closed += 1
+
+
+def test_custom_renderer_draws_the_frames():
+    r = _Frames()
+    env = WinchPayoutEnv(render_mode="rgb_array", renderer=r)
+    assert env.renderer is r
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.action_space.sample())
+    frame = env.render()
+    assert frame.shape == (4, 6, 3) and frame[0, 0, 0] == 3 and r.calls == [pytest.approx(0.3)]
+    env.close()
+    assert r.closed == 1
+    assert env.render()[0, 0, 0] == 3 and len(r.calls) == 2          # re-used after close
+    clone = pickle.loads(pickle.dumps(env))                           # pickled with the environment
+    assert isinstance(clone.renderer, _Frames) and clone.render()[0, 0, 0] == 3
+    # "human": drawn at every reset and step, whatever it returns
+    r = _Frames()
+    env = CompensatorGainsEnv(render_mode="human", renderer=r)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    assert r.calls == [0.0, pytest.approx(0.1)]
+    # no render_mode: the renderer is not called
+    r = _Frames()
+    env = CompensatorGainsEnv(renderer=r)
+    env.reset(seed=0)
+    with pytest.warns(UserWarning, match="render_mode"):
+        assert env.render() is None and r.calls == []
+    # a vector environment renders every copy with it
+    venv = gym.make_vec("towenv/WinchPayout-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                        render_mode="rgb_array", renderer=_Frames())
+    venv.reset(seed=0)
+    frames = venv.render()
+    assert len(frames) == 2 and all(f.shape == (4, 6, 3) for f in frames)
+    venv.close()
+
+
+def test_default_renderer_is_the_side_viewer():
+    from towenv.envs.render import SideViewer
+    env = CompensatorGainsEnv(render_mode="rgb_array")
+    env.reset(seed=0)
+    frame = env.render()
+    assert isinstance(env._viewer, SideViewer) and frame.ndim == 3 and frame.shape[-1] == 3
+    env.close()
+
+
+@pytest.mark.parametrize("bad", ["side", 3])
+def test_bad_renderer_raises_config_error(bad):
+    with pytest.raises(ConfigError, match="renderer"):
+        CompensatorGainsEnv(render_mode="rgb_array", renderer=bad)

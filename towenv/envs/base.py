@@ -70,9 +70,11 @@ class TowEnv(gym.Env):
         exceeding either *terminates* the episode. ``breaking_load=None`` means :data:`DEFAULT_BREAKING_LOAD`
         (``{}`` = no limit); ``floor_depth=None`` disables the floor. ``termination`` replaces the default
         piece (a :class:`~towenv.envs.pieces.Termination`; ``floor_depth`` is then unused).
-    body, sim_overrides, render_mode
+    body, sim_overrides, render_mode, renderer
         Towed body scored (default ``"fish"``), solver overrides passed to ``Simulator`` (e.g.
-        ``{"max_step_cuts": 0}``), ``"rgb_array"`` or ``"human"``.
+        ``{"max_step_cuts": 0}``), ``"rgb_array"`` or ``"human"``, and what draws the frames: a callable
+        ``renderer(env) -> frame`` (an (H, W, 3) uint8 array for ``"rgb_array"``), with an optional ``close()``;
+        default :class:`~towenv.envs.render.SideViewer`.
 
     Every keyword and every ``reset`` option is checked (:class:`~towenv.envs.checks.ConfigError`, naming it);
     a malformed action raises :class:`~towenv.envs.checks.ActionError` and ``step`` without a live episode
@@ -100,7 +102,7 @@ class TowEnv(gym.Env):
                  breaking_load: float | Mapping[str, float] | None = None, floor_depth: float | None = 80.0,
                  termination=None,
                  body: str = "fish", sim_overrides: Mapping[str, Any] | None = None,
-                 fidelity: float | None = None, render_mode: str | None = None,
+                 fidelity: float | None = None, render_mode: str | None = None, renderer=None,
                  mru_delay: float = 0.0, mean_time_constant: float | None = 30.0):
         super().__init__()
         own = type(self).__name__
@@ -109,6 +111,9 @@ class TowEnv(gym.Env):
         self.mean_time_constant = C.real(own, "mean_time_constant", mean_time_constant, 0.0, lo_open=True, unit="s",
                                          none="deviations about the steady tow")
         C.choice(own, "render_mode", render_mode, self.metadata["render_modes"], none="no rendering")
+        if renderer is not None and not callable(renderer):
+            raise C.ConfigError(f"{own}: renderer must be callable, renderer(env) -> frame (an (H, W, 3) uint8 array "
+                                f"for render_mode 'rgb_array'), or None (the SideViewer) (got {renderer!r})")
         control_hz = C.real(own, "control_hz", control_hz, 0.0, lo_open=True, unit="Hz")
         dt = C.real(own, "dt", dt, 1e-5, 1.0, unit="s", none="the scene's solver.dt or automatic")
         fidelity = C.real(own, "fidelity", fidelity, 0.0, 1.0, lo_open=True, hi_open=True,
@@ -170,6 +175,7 @@ class TowEnv(gym.Env):
         scene_overrides = C.mapping(own, "scene_overrides", scene_overrides, none="no overrides")
 
         self.render_mode = render_mode
+        self.renderer = renderer
         self.control_hz = float(control_hz)
 
         self.sea_codes = sea_codes
@@ -678,23 +684,29 @@ class TowEnv(gym.Env):
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'human'")
             return None
         if self._viewer is None:
-            from .render import SideViewer
-            self._viewer = SideViewer(human=self.render_mode == "human", fps=self.metadata["render_fps"])
-        return self._viewer.draw(self)
+            if self.renderer is not None:
+                self._viewer = self.renderer
+            else:
+                from .render import SideViewer
+                self._viewer = SideViewer(human=self.render_mode == "human", fps=self.metadata["render_fps"])
+        return self._viewer(self)
 
     def close(self):
         if self._viewer is not None:
-            self._viewer.close()
+            close = getattr(self._viewer, "close", None)
+            if callable(close):
+                close()
             self._viewer = None
 
     def __getstate__(self):
         st = self.__dict__.copy()
-        st["_viewer"] = None           # matplotlib figures are not pickled; re-created on demand
-        return st
+        st["_viewer"] = None           # matplotlib figures are not pickled; re-created on demand (a given
+        return st                      # ``renderer`` is pickled with the environment)
 
     def __setstate__(self, st):
         st.setdefault("_needs_reset", False)     # pickles of earlier versions
         st.setdefault("_act_shape", (type(self).ACTION_DIM,))
+        st.setdefault("renderer", None)
         self.__dict__.update(st)
 
     # ------------------------------------------------------------------ convenience

@@ -10,7 +10,10 @@ __all__ = ["SideViewer"]
 
 class SideViewer:
     """x–z side view relative to the tow point: cable shapes (``sim.line_state(name)["positions"]``),
-    bodies drawn as bars along their pitch attitude, the wave surface, and a status line."""
+    bodies drawn as bars along their pitch attitude, the wave surface, and a status line.
+
+    The environments' default renderer: a renderer is any callable ``renderer(env) -> frame`` (``None`` in
+    ``"human"`` mode), optionally with ``close()`` — pass another one as ``renderer=``."""
 
     def __init__(self, human: bool = False, fps: int = 10, size=(6.4, 4.0), dpi: int = 100):
         self.human = human
@@ -83,6 +86,8 @@ class SideViewer:
             return None
         buf = np.asarray(self.canvas.buffer_rgba())
         return np.ascontiguousarray(buf[..., :3])
+
+    __call__ = draw
 
     def close(self):
         if self.human:
