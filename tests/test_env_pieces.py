@@ -275,6 +275,17 @@ def test_custom_dict_termination_is_asked_every_step():
     assert te and info["termination"] == "<lambda>"
 
 
+def test_limits_and_dict_pieces_read_every_measurement_column():
+    """A limit on a column the environment does not report in ``_last_m`` (the other actuator's: 0 here)."""
+    env = CompensatorGainsEnv(termination=Limits(Limit("winch_length", "<", 1.0, "no_winch")))
+    env.reset(seed=0)
+    _, _, te, _, info = env.step(env.action_space.sample())
+    assert te and info["termination"] == "no_winch: winch_length = 0 < 1"
+    env = WinchPayoutEnv(termination=lambda m: "gains" if m["comp_stiffness"] == 0.0 and m["time_left"] < 1 else None)
+    env.reset(seed=0)
+    assert env.step(env.action_space.sample())[4]["termination"] == "gains"
+
+
 class _BadLimits:
     limits = ("tension_ratio >= 1",)
 

@@ -661,8 +661,12 @@ class TowEnv(gym.Env):
         return tuple(dict.fromkeys(which))
 
     def _termination_dict(self, row, action, preview=None) -> dict:
-        """The measurement dict handed to the termination piece: :meth:`_row_dict` and ``overloaded``."""
+        """The measurement dict handed to the termination piece: :meth:`_row_dict`, every other column of the
+        row (what a compiled limit can read) and ``overloaded``."""
         m = self._row_dict(row, action, preview)
+        for k, j in MS.COL.items():
+            if k not in m:
+                m[k] = float(row[j])
         m["overloaded"] = self._overloaded(self.sim) if row[MS.M_T_RATIO] >= 1.0 else ()
         return m
 

@@ -587,9 +587,9 @@ class Termination:
     ``limits``: None, or a tuple of :class:`Limit` making the same decision as thresholds on measurement
     columns. The environment then evaluates them compiled, for all copies of a vector environment at once,
     and calls ``term(m)`` only for a copy that ends (for its reason); without limits it calls ``term(m)``
-    for every copy at every step (``m`` as for the reward, plus ``m["overloaded"]``: the lines, and
-    ``"tow point"``, at or above their breaking load). A piece is shared by the copies of a vector
-    environment: keep it stateless."""
+    for every copy at every step (``m`` as for the reward, plus every column of the measurement row and
+    ``m["overloaded"]``: the lines, and ``"tow point"``, at or above their breaking load). A piece is shared
+    by the copies of a vector environment: keep it stateless."""
 
     limits: tuple[Limit, ...] | None = None
 
