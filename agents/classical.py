@@ -110,7 +110,7 @@ class SkyhookCompensator(Baseline):
             self.acts_on = "observations + sea state"
         self.fixed = dict(DEFAULT_SKYHOOK_GAINS | (gains or {}))
         self.g = dict(self.fixed)
-        self._kmap, self._bmap = self.u._k_map, self.u._b_map
+        self._kmap, self._bmap = self.u.stiffness_range, self.u.damping_range
         if name:
             self.name = name
 

@@ -80,8 +80,8 @@ def _log(msg):
 def tune_passive(env, groups, k_grid=None, b_grid=None, refine_rounds: int = 2, coarse_episodes: int = 2):
     u = env.unwrapped
     c = u.sim.scene.compensator
-    klo, khi = u._k_map[0], u._k_map[1]
-    blo, bhi = u._b_map[0], u._b_map[1]
+    klo, khi = u.stiffness_range[0], u.stiffness_range[1]
+    blo, bhi = u.damping_range[0], u.damping_range[1]
     k_grid = list(k_grid or [klo, 3000.0, 10000.0, 30000.0, khi])
     b_grid = list(b_grid or [blo, 300.0, 1500.0, 5000.0, 15000.0, bhi])
     table = {}

@@ -1,6 +1,6 @@
 """Issue 17 (hardening): every defect found when the project was tried as a careless user would, each with
 a regression test; plus a hypothesis fuzz of the command line. The environment items are in
-tests/test_env_hardening.py, the Ray sweep in tests/agents/test_tune_ray.py."""
+tests/envs/test_env_hardening.py, the Ray sweep in tests/agents/test_tune_ray.py."""
 from __future__ import annotations
 
 import json

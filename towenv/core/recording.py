@@ -9,7 +9,7 @@ nodes' ``hist_r`` levels, ``hist_ang``, ``body_chart``, ``tens_hist[0]``, ``top_
 compensator the sheave and ship heights and k, b) into the recorder's preallocated arrays.
 
 The results are bit-identical to the per-record loop (tested, ``tests/unit/test_recording.py``): the kernel is
-called with the same arguments (``batch.kernel_args``), the tow points come from ``Simulator._tow_points``
+called with the same arguments (``Simulator.kernel_data()``), the tow points come from ``Simulator._tow_points``
 (aligned blocks: independent of the chunking) and each record's start time is ``step_count * dt`` as in
 ``Simulator.advance_steps``. Chunks are sized to ~0.2 s of wall time (at most ``MAX_CHUNK_STEPS`` steps),
 which keeps the progress bar and Ctrl-C responsive.
@@ -34,7 +34,6 @@ import numpy as np
 from numba import njit
 
 from . import kernels as K
-from .batch import kernel_args
 
 #: largest chunk of physics steps advanced by one compiled call
 MAX_CHUNK_STEPS = 1 << 15
@@ -134,7 +133,8 @@ def advance_recorded(sim, rec, n_records: int, every: int, on_chunk=None, max_ch
         step0 = sim.step_count
         tops = sim._tow_points(step0 + 1, m * every)
         t0s = (step0 + every * np.arange(m, dtype=np.int64)) * dt        # = Simulator.t at each record's start
-        head, wave = kernel_args(sim)
+        kd = sim.kernel_data()
+        head, wave = kd.head, kd.wave
         src = (sim.hist_r, sim.hist_ang, sim.body_chart, sim.tens_hist, sim.top_react, sim.comp)
         CZ = np.zeros((m if has_comp else 0, 3, 2))
         CKB = np.zeros((m if has_comp else 0, 2))

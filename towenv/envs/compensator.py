@@ -107,6 +107,17 @@ class CompensatorGainsEnv(TowEnv):
             return -1.0
         return float(np.clip(2.0 * math.log(g / lo) / math.log(hi / lo) - 1.0, -1.0, 1.0))
 
+    @property
+    def stiffness_range(self) -> tuple[float, float, float, float]:
+        """The action → stiffness map: ``(lo, hi, bound_lo, bound_hi)`` N/m (log-linear from ``lo`` at −1 to
+        ``hi`` at +1, clipped to the compensator's bounds; ``lo`` is ``stiffness_floor`` when the lower bound is 0)."""
+        return self._k_map
+
+    @property
+    def damping_range(self) -> tuple[float, float, float, float]:
+        """The action → damping map, as :attr:`stiffness_range` (N s/m)."""
+        return self._b_map
+
     def gains(self, action) -> tuple[float, float]:
         """(stiffness N/m, damping N s/m) of an action in [-1, 1]²."""
         a0, a1 = (min(max(float(x), -1.0), 1.0) for x in np.asarray(action, float).reshape(2))

@@ -4,10 +4,10 @@ simulator's kernel accessor, and the reference trajectories that pin the environ
 ``tests/data/env_reference.npz`` holds observations, rewards, flags, reward components and info texts
 of both environments (single, vector, winch remesh, sensor noise and delay, wave preview, termination,
 numerical failure) recorded at commit cbf06b3, *before* the measurement rows and the batched stepper moved
-from ``towenv.core.batch`` to ``towenv.envs`` and termination and rendering became pieces. Regenerate it
+from ``towenv.core.batch`` (now gone) to ``towenv.envs`` and termination and rendering became pieces. Regenerate it
 only for a change that is meant to alter the environments' results::
 
-    python tests/test_env_pieces.py --write-reference
+    python tests/envs/test_env_pieces.py --write-reference
 
 As for ``houbolt_reference.npz``, numba compiles for the host CPU: the file records :func:`fingerprint`
 and the comparison is bit for bit when it matches, to round-off otherwise.
@@ -29,9 +29,9 @@ from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
 from towenv.envs.pieces import Limit, Limits, PartedOrGrounded, Termination  # noqa: E402
 from towenv.envs.winch import WinchPayoutEnv  # noqa: E402
 
-#: tests/data/env_reference.npz (looked up from this file's folder upwards, so the test can move into a sub-folder)
-REFERENCE = next((d / "data" / "env_reference.npz" for d in Path(__file__).resolve().parents
-                  if (d / "data" / "env_reference.npz").exists()), Path(__file__).parent / "data" / "env_reference.npz")
+from helpers import DATA  # noqa: E402
+
+REFERENCE = DATA / "env_reference.npz"
 
 
 def fingerprint() -> str:
@@ -160,16 +160,14 @@ def test_default_pieces_reproduce_the_reference_trajectories():
 
 def test_kernel_data_runs_the_kernel_as_advance_steps_does():
     """``Simulator.kernel_data()``: the kernel's arrays by reference; running ``kernels.advance`` on them is
-    ``advance_steps`` (the compatibility ``towenv.core.batch.kernel_args`` gives the same tuples)."""
+    ``advance_steps``."""
     from towenv.core import kernels as K
-    from towenv.core.batch import kernel_args
     from towenv.core.simulator import KernelData, Simulator
 
     a, b = Simulator("two_part_tow_1"), Simulator("two_part_tow_1")
     kd = a.kernel_data()
     assert isinstance(kd, KernelData) and kd.state[0] is a.hist_r and kd.comp is a.comp and kd.winch is a.winch
-    head, wave = kernel_args(a)
-    assert len(head) == len(kd.head) and all(x is y for x, y in zip(head[6:], kd.head[6:])) and wave is kd.wave
+    assert all(x is y for x, y in zip(kd.head, kd.args)) and kd.head[len(kd.args)] is kd.settings
     n, dt = 40, a.dt
     tops = a.path.position(np.arange(1, n + 1) * dt)
     st, _, _, _ = K.advance(n, dt, tops, *kd.head, 0.0, kd.wave)
