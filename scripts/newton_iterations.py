@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from towenv import fidelity as F
-from towenv.core import twin
+from towenv.verification import twin
 from towenv.core.run import simulate
 from towenv.core.simulator import Simulator, load
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from towenv.core import kernels as K
 from towenv.core import simulator as simmod
-from towenv.core import twin
+from towenv.verification import twin
 
 
 RTOL = 1e-12

@@ -109,7 +109,7 @@ def test_series_relaxation_changes_the_rate_not_the_converged_step():
     twin to a tight tolerance with and without the body–tail relaxation: the same converged state (both
     converge at Δt = 0.02 s), while at Δt = 0.05 s only the relaxed iteration converges — the unrelaxed
     one's gain is about m_tail/m_body = 1.3 > 1 for fish 2, whose tail outweighs it."""
-    from towenv.core import twin
+    from towenv.verification import twin
 
     for dt, unrelaxed_converges in ((0.02, True), (0.05, False)):
         sim = towenv.Simulator("series_multitow", dt=dt)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from towenv.core import kernels as K
-from towenv.core import twin
+from towenv.verification import twin
 from towenv.core.run import simulate
 from towenv.core.simulator import Simulator, load
 

@@ -14,7 +14,7 @@ import pytest
 
 import towenv
 from towenv.core import kernels as K
-from towenv.core import twin
+from towenv.verification import twin
 
 
 def _reduced_bodies(scene):

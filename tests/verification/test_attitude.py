@@ -24,7 +24,7 @@ import pytest
 
 import towenv
 from towenv.core import kernels as K
-from towenv.core import twin
+from towenv.verification import twin
 from towenv.core.simulator import physical_attitude, quaternion_from_rotation
 
 from helpers import DATA

@@ -1,4 +1,4 @@
-"""The numba kernels against their plain-numpy twins (towenv.core.twin), and the tension-solver checks of
+"""The numba kernels against their plain-numpy twins (towenv.verification.twin), and the tension-solver checks of
 verification.md V9.
 
 * every kernel equals its twin on random states (positions/velocities perturbing a built system, with a
@@ -28,7 +28,7 @@ import pytest
 
 from towenv.core import kernels as K
 from towenv.core import simulator as simmod
-from towenv.core import twin
+from towenv.verification import twin
 from towenv.core.system import MAX_SEGS_PER_NODE, build_system
 
 from twin_cases import (CURRENT, DEP_TAB, EXCITATION, FISH_HTAB, FISH_TAB, RAMP, RTOL, SCENES,  # noqa: F401

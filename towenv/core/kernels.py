@@ -1,7 +1,7 @@
 """Numba kernels of the lumped-mass tow simulator (Houbolt + Newton on segment tensions).
 
 Everything here works on flat arrays (see :mod:`towenv.core.system` for their meaning). Each public
-kernel has a plain-numpy twin in :mod:`towenv.core.twin` that the tests compare against.
+kernel has a plain-numpy twin in :mod:`towenv.verification.twin` that the tests compare against.
 
 Where each force is computed (one search finds it):
 
