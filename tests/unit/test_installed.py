@@ -26,7 +26,8 @@ def test_tests_import_the_installed_package():
     if editable is None:
         pytest.fail("towenv is not installed: install it (pip install \".[rl,dev]\") and run python -P -m pytest")
     for mod in (towenv, agents):
-        inside_checkout = REPO in Path(mod.__file__).resolve().parents
+        # the checkout's own package folder (a virtual environment may well sit inside the checkout)
+        inside_checkout = Path(mod.__file__).resolve().parent == (REPO / mod.__name__).resolve()
         if editable:
             assert inside_checkout, f"{mod.__name__} from {mod.__file__} with an editable install of {REPO}"
         else:

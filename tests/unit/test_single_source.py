@@ -39,3 +39,17 @@ def test_build_system_reads_the_validated_scene():
     assert np.allclose(b.bodyp()[0][0, 13:16], RigidBody.model_fields["rotational_damping"].default)
     assert np.array_equal(a.bodyp()[0], b.bodyp()[0])
     assert np.array_equal(a.segp()[0], b.segp()[0]) and a.rho == b.rho and a.g == b.g
+
+
+def test_body_parameter_columns_are_named_outside_the_layout():
+    """Issue 16, item 1 (part): no raw column numbers into ``System.bp`` outside towenv/core/layout.py."""
+    import re
+    from pathlib import Path
+    root = Path(system.__file__).resolve().parents[1]
+    raw = re.compile(r"\b(bp|bodyp\[0\])\[[^\[\],]+, *\d")
+    hits = [f"{p.relative_to(root)}:{i}" for p in root.rglob("*.py") if p.name != "layout.py"
+            for i, line in enumerate(p.read_text().splitlines(), 1) if raw.search(line)]
+    assert not hits, hits
+    from towenv.core import layout
+    cols = sorted(v for k, v in vars(layout).items() if k.startswith("BP_"))
+    assert cols[-1] == layout.BODY_PARAM - 1 and len(set(cols)) == len(cols)

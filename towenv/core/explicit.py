@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from .layout import BP_AFT_TOW_POINT, BP_CB
 from numba import njit
 
 from . import kernels as K
@@ -45,7 +46,7 @@ def _rates(r, v, ang, omg, top_r, top_v, topo, segp, bodyp, env, c_axial, ws, ou
             continue
         K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
         a = body_node[b]
-        _cross_add(omg[b], bp[b, 26:29], lam, v[a], r[a], r[c], v[c])
+        _cross_add(omg[b], bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3], lam, v[a], r[a], r[c], v[c])
     K.segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
                     tang, stretched, drag, bmat, madd)
     K.node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
@@ -72,7 +73,7 @@ def _rates(r, v, ang, omg, top_r, top_v, topo, segp, bodyp, env, c_axial, ws, ou
         K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
         for i in range(3):
             tmp3[i] = lam[i, 0] * v[a, 0] + lam[i, 1] * v[a, 1] + lam[i, 2] * v[a, 2]
-        zc = r[a, 2] + lam[0, 2] * bp[b, 7] + lam[1, 2] * bp[b, 8] + lam[2, 2] * bp[b, 9]
+        zc = r[a, 2] + lam[0, 2] * bp[b, BP_CB] + lam[1, 2] * bp[b, BP_CB + 1] + lam[2, 2] * bp[b, BP_CB + 2]
         K.current_at(zc, cur_z, cur_v, cur_b)
         for i in range(3):
             wbody[i] = omg[b, i]
@@ -223,7 +224,7 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
                 continue
             K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
             a = topo[9][b]
-            _cross_add(omg[b], bodyp[0][b, 26:29], lam, v[a], r[a], r[c], v[c])
+            _cross_add(omg[b], bodyp[0][b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3], lam, v[a], r[a], r[c], v[c])
         # failure detection
         for a in range(nn):
             for i in range(3):

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from .layout import BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG, BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_REDUCED_DOF, BP_ROT_DAMPING, BP_TAIL_MASS, BP_VOLUME
 from numba import njit as _njit
 
 # reassociation/contraction allowed; NaN/Inf semantics kept (failure detection relies on them)
@@ -381,21 +382,21 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
     """Hydrodynamic, weight/buoyancy and rotational damping loads on rigid body ``b``.
 
     Body-axis force ``f_out`` acting at the tow point and moment ``m_out`` about the tow point.
-    ``bp[b]`` packs the body parameters (see ``system.BODY_PARAM``); ``btab[b]`` the coefficient tables
+    ``bp[b]`` packs the body parameters (columns: :mod:`towenv.core.layout`); ``btab[b]`` the coefficient tables
     (rows: incidence_deg, drag, lift, moment for the vertical plane, then the horizontal plane).
     ``bdiag_out`` returns an isotropic estimate of the translational drag derivative (for the implicit
     drag of the node mass; it affects only the convergence rate, never the converged answer).
     """
-    mass = bp[b, 0]
-    vol = bp[b, 1]
-    area = bp[b, 2]
-    length = bp[b, 3]
-    xb = bp[b, 7]
-    yb = bp[b, 8]
-    zb = bp[b, 9]
-    xg = bp[b, 4]
-    yg = bp[b, 5]
-    zg = bp[b, 6]
+    mass = bp[b, BP_MASS]
+    vol = bp[b, BP_VOLUME]
+    area = bp[b, BP_AREA]
+    length = bp[b, BP_LENGTH]
+    xb = bp[b, BP_CB]
+    yb = bp[b, BP_CB + 1]
+    zb = bp[b, BP_CB + 2]
+    xg = bp[b, BP_CG]
+    yg = bp[b, BP_CG + 1]
+    zg = bp[b, BP_CG + 2]
     # weight and buoyancy (body axes)
     gb0 = -lam[0, 2] * g
     gb1 = -lam[1, 2] * g
@@ -448,11 +449,11 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
         m_out[1] -= q * length * cm_v
         m_out[2] += q * length * cm_h
         # isotropic drag-derivative estimate for the implicit drag
-        bdiag_out[0] = qa * vmag * (2.0 * cd + bp[b, 19])
+        bdiag_out[0] = qa * vmag * (2.0 * cd + bp[b, BP_LIFT_SLOPE])
     # rotational damping: linear rotary derivatives + Hover (17) quadratic term
     for k in range(3):
-        lin = bp[b, 13 + k]
-        quad = bp[b, 16 + k]
+        lin = bp[b, BP_ROT_DAMPING + k]
+        quad = bp[b, BP_QUAD_ROT_DAMPING + k]
         w = omega[k]
         m_out[k] -= qa * length * length * vmag * lin * w + qa * quad * length ** 3 / 32.0 * w * abs(w)
 
@@ -460,21 +461,21 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
 @njit(cache=True)
 def body_mass_blocks(b, bp, att, atr, arr):
     """Rigid-body + added mass blocks about the tow point: A = [[A_tt, A_tr], [A_rt, A_rr]], A_rt = A_trᵀ."""
-    mass = bp[b, 0]
-    xg = bp[b, 4]
-    yg = bp[b, 5]
-    zg = bp[b, 6]
+    mass = bp[b, BP_MASS]
+    xg = bp[b, BP_CG]
+    yg = bp[b, BP_CG + 1]
+    zg = bp[b, BP_CG + 2]
     rg = (xg, yg, zg)
     for i in range(3):
         for j in range(3):
             att[i, j] = 0.0
             arr[i, j] = 0.0
-        att[i, i] = mass + bp[b, 20 + i]
+        att[i, i] = mass + bp[b, BP_ADDED_MASS + i]
     r2 = xg * xg + yg * yg + zg * zg
     for i in range(3):
         for j in range(3):
             arr[i, j] = -mass * rg[i] * rg[j]
-        arr[i, i] += mass * r2 + bp[b, 10 + i] + bp[b, 23 + i]
+        arr[i, i] += mass * r2 + bp[b, BP_INERTIA + i] + bp[b, BP_ADDED_INERTIA + i]
     # A_tr = -m S(r_G)   (S(a) b = a x b)
     atr[0, 0] = 0.0
     atr[0, 1] = mass * zg
@@ -515,12 +516,12 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
         fb[0] += f0
         fb[1] += f1
         fb[2] += f2
-        _cross(bp[b, 26], bp[b, 27], bp[b, 28], f0, f1, f2, tmp3)
+        _cross(bp[b, BP_AFT_TOW_POINT], bp[b, BP_AFT_TOW_POINT + 1], bp[b, BP_AFT_TOW_POINT + 2], f0, f1, f2, tmp3)
         for i in range(3):
             mb[i] += tmp3[i]
     # Coriolis / centripetal terms to the right-hand side
-    mass = bp[b, 0]
-    _cross(w[0], w[1], w[2], bp[b, 4], bp[b, 5], bp[b, 6], tmp3)
+    mass = bp[b, BP_MASS]
+    _cross(w[0], w[1], w[2], bp[b, BP_CG], bp[b, BP_CG + 1], bp[b, BP_CG + 2], tmp3)
     wx0 = tmp3[0]
     wx1 = tmp3[1]
     wx2 = tmp3[2]
@@ -735,7 +736,7 @@ def place_aft_nodes(r, ang, chart, body_node, body_aft_node, bp, lam):
         _chart_rotation(ang[b, 0], ang[b, 1], ang[b, 2], chart, b, lam)
         a = body_node[b]
         for i in range(3):
-            r[c, i] = r[a, i] + lam[0, i] * bp[b, 26] + lam[1, i] * bp[b, 27] + lam[2, i] * bp[b, 28]
+            r[c, i] = r[a, i] + lam[0, i] * bp[b, BP_AFT_TOW_POINT] + lam[1, i] * bp[b, BP_AFT_TOW_POINT + 1] + lam[2, i] * bp[b, BP_AFT_TOW_POINT + 2]
 
 
 @njit(cache=True)
@@ -1130,10 +1131,10 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             w = omg[b]
             for i in range(3):
                 tmp3[i] = lam[i, 0] * vs[a, 0] + lam[i, 1] * vs[a, 1] + lam[i, 2] * vs[a, 2]
-            zc = rs[a, 2] + lam[0, 2] * bp[b, 7] + lam[1, 2] * bp[b, 8] + lam[2, 2] * bp[b, 9]
+            zc = rs[a, 2] + lam[0, 2] * bp[b, BP_CB] + lam[1, 2] * bp[b, BP_CB + 1] + lam[2, 2] * bp[b, BP_CB + 2]
             current_at(zc, cur_z, cur_v, cur_b)
             body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
-            reduced = planar or bp[b, 29] != 0.0
+            reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
             if it == 1:
                 _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33,
                                       reduced)
@@ -1161,7 +1162,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 c = body_aft_node[b]
                 if c >= 0:
                     aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
-                                             stretched, tens, l0, ea, hdt2, bp[b, 30], bkc)
+                                             stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc)
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
         for a in range(nn):
             if node_kind[a] == COMPENSATOR:
@@ -1191,7 +1192,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                     continue
                 for k in range(node_nseg[c]):
                     sk = node_segs[c, k]
-                    kax, kgeo = aft_segment_stiffness(sk, bp[b, 30], stretched, tens, l0, ea, hdt2)
+                    kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
                     if kax == 0.0 and kgeo == 0.0:
                         continue
                     for i in range(3):
@@ -1295,7 +1296,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             for i in range(3):
                 tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
             omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
-            reduced = planar or bp[b, 29] != 0.0
+            reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
             for i in range(3):
                 if reduced and i != 1:
                     angs[b, i] = hist_ang[0, b, i]      # roll and yaw held

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Callable, NamedTuple
 
 import numpy as np
+from .layout import BP_AFT_TOW_POINT, BP_CB, BP_CG, BP_REDUCED_DOF
 
 from ..errors import SimulationDivergence
 from . import kernels as K
@@ -171,7 +172,7 @@ class Simulator:
                 raise ValueError(f"solver.newton_stop: 'estimate' exists for the houbolt solver only (solver.method = "
                                  f"{getattr(self, 'scheme', method)!r}); use 'change'")
         reduced = [b.name for b in self.system.bodies if getattr(b, "rigid_index", -1) >= 0
-                   and self.system.bp[b.rigid_index, 29] != 0.0]
+                   and self.system.bp[b.rigid_index, BP_REDUCED_DOF] != 0.0]
         if not self.settings.planar and not reduced:
             return
         what = "solver.planar" if self.settings.planar else f"bodies {reduced!r}: dof = 'surge_heave_pitch'"
@@ -211,7 +212,7 @@ class Simulator:
             if bm.rigid_index < 0:
                 continue
             p = s.bp[bm.rigid_index]
-            for name, k in (("cg", 5), ("cb", 8), ("aft_tow_point", 27)):
+            for name, k in (("cg", BP_CG + 1), ("cb", BP_CB + 1), ("aft_tow_point", BP_AFT_TOW_POINT + 1)):   # y components
                 if p[k] != 0.0:
                     refuse(f"bodies[{bm.name!r}].{name}", f"the lateral (y) offset must be 0 (got {p[k]!r} m)")
             nh = int(s.btab_n[bm.rigid_index, 1])

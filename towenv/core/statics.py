@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from .layout import BP_AFT_TOW_POINT
 from scipy.optimize import brentq
 
 from .kernels import FREE, PRESCRIBED_AFT, body_loads, current_at, rotation_matrix
@@ -56,7 +57,7 @@ def body_static_load(sys: System, ib: int, U, z, tail_force=None, pitch=None):
         if tail_force is not None:
             fb = lam @ tail_force
             ff += fb
-            mm += np.cross(bp[ib, 26:29], fb)
+            mm += np.cross(bp[ib, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3], fb)
         return ff, mm, lam.copy()
 
     if pitch is None:
@@ -165,7 +166,7 @@ def quasi_static(sys: System, top_position, U, n_passes=None):
                 ib = aft_of_node[a]
                 lam = np.empty((3, 3))
                 rotation_matrix(ang[ib, 0], ang[ib, 1], ang[ib, 2], lam)
-                r[a] = r[sys.body_node[ib]] + lam.T @ sys.bp[ib, 26:29]
+                r[a] = r[sys.body_node[ib]] + lam.T @ sys.bp[ib, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3]
                 continue
             s = sys.node_up_seg[a]
             stretch = 1.0 if np.isinf(sys.ea[s]) else 1.0 + tens[s] / sys.ea[s]

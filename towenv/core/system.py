@@ -10,11 +10,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from .layout import (BODY_PARAM, BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG,  # noqa: F401
+                     BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_REDUCED_DOF,
+                     BP_ROT_DAMPING, BP_TAIL_MASS, BP_VOLUME)
 
 from .kernels import COMPENSATOR, FREE, PRESCRIBED_AFT, PRESCRIBED_FIXED, PRESCRIBED_TOP
 
 MAX_SEGS_PER_NODE = 8
-BODY_PARAM = 31          # see the layout in _rigid_body_params
 MAX_TABLE = 64
 
 
@@ -335,7 +337,7 @@ def build_system(scene) -> System:
         tabs, n = _tables(b)
         btab[ir, :, :] = tabs
         btab_n[ir] = n
-        bp[ir, 19] = _slope_at_zero(tabs[0, :n[0]], tabs[2, :n[0]])
+        bp[ir, BP_LIFT_SLOPE] = _slope_at_zero(tabs[0, :n[0]], tabs[2, :n[0]])
         body_maps.append(BodyMap(name, kind, nd, ir, int(body_aft[ir])))
         ir += 1
 
@@ -357,7 +359,7 @@ def build_system(scene) -> System:
 
 
 def tail_masses(system: "System") -> None:
-    """Store in ``bp[b, 30]`` the mass hanging below each body's aft tow point (series tows): cable dry
+    """Store in ``bp[b, BP_TAIL_MASS]`` the mass hanging below each body's aft tow point (series tows): cable dry
     mass, clump/ball masses and towed bodies' mass plus their largest added mass; ``inf`` when the tail
     ends at an anchor. Used only to relax the body–tail coupling of the Newton loop
     (``kernels.aft_segment_stiffness``), so an estimate is enough."""
@@ -370,7 +372,7 @@ def tail_masses(system: "System") -> None:
     for b in range(nb):
         c = int(s.body_aft_node[b])
         if c < 0:
-            s.bp[b, 30] = 0.0
+            s.bp[b, BP_TAIL_MASS] = 0.0
             continue
         inside = np.zeros(nn, bool)
         for a in range(nn):
@@ -379,14 +381,14 @@ def tail_masses(system: "System") -> None:
                 x = int(s.node_parent[x])
             inside[a] = x == c
         if np.any(s.node_kind[inside] == PRESCRIBED_FIXED):
-            s.bp[b, 30] = np.inf
+            s.bp[b, BP_TAIL_MASS] = np.inf
             continue
         m = float(np.sum((s.mu * s.l0)[inside[s.seg_up]])) + float(np.sum(s.pb_mass[inside]))
         for a in np.nonzero(inside)[0]:
             r = rigid_at.get(int(a))
             if r is not None:
-                m += float(s.bp[r, 0] + np.max(s.bp[r, 20:23]))
-        s.bp[b, 30] = m
+                m += float(s.bp[r, BP_MASS] + np.max(s.bp[r, BP_ADDED_MASS:BP_ADDED_MASS + 3]))
+        s.bp[b, BP_TAIL_MASS] = m
 
 
 def current_table(cur):
@@ -405,24 +407,21 @@ def _vec(v):
 
 
 def _rigid_body_params(b) -> np.ndarray:
-    """Layout: 0 mass, 1 volume, 2 area, 3 length, 4-6 r_G, 7-9 r_B, 10-12 I_G (principal),
-    13-15 linear rotational damping, 16-18 quadratic rotational damping, 19 lift slope (per rad),
-    20-22 added mass, 23-25 added inertia, 26-28 aft tow point, 29 reduced DOF flag (1: surge/heave/pitch,
-    roll and yaw held), 30 tail mass (series tows, set by :func:`tail_masses`)."""
+    """One row of ``System.bp`` (the column layout is :mod:`towenv.core.layout`)."""
     p = np.zeros(BODY_PARAM)
-    p[0] = float(b.mass)
-    p[1] = float(b.volume)
-    p[2] = float(b.reference_area)
-    p[3] = float(b.reference_length)
-    p[4:7] = _vec(b.cg)
-    p[7:10] = _vec(b.cb if b.cb is not None else b.cg)              # the schema: cb defaults to cg
-    p[10:13] = _vec(b.inertia)
-    p[13:16] = _vec(b.rotational_damping)
-    p[16:19] = _vec(b.quadratic_rotational_damping)
-    p[20:23] = _vec(b.added_mass)
-    p[23:26] = _vec(b.added_inertia)
-    p[26:29] = _vec(b.aft_tow_point if b.aft_tow_point is not None else (0.0, 0.0, 0.0))   # none: unused
-    p[29] = 1.0 if b.dof == "surge_heave_pitch" else 0.0
+    p[BP_MASS] = float(b.mass)
+    p[BP_VOLUME] = float(b.volume)
+    p[BP_AREA] = float(b.reference_area)
+    p[BP_LENGTH] = float(b.reference_length)
+    p[BP_CG:BP_CG + 3] = _vec(b.cg)
+    p[BP_CB:BP_CB + 3] = _vec(b.cb if b.cb is not None else b.cg)              # the schema: cb defaults to cg
+    p[BP_INERTIA:BP_INERTIA + 3] = _vec(b.inertia)
+    p[BP_ROT_DAMPING:BP_ROT_DAMPING + 3] = _vec(b.rotational_damping)
+    p[BP_QUAD_ROT_DAMPING:BP_QUAD_ROT_DAMPING + 3] = _vec(b.quadratic_rotational_damping)
+    p[BP_ADDED_MASS:BP_ADDED_MASS + 3] = _vec(b.added_mass)
+    p[BP_ADDED_INERTIA:BP_ADDED_INERTIA + 3] = _vec(b.added_inertia)
+    p[BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3] = _vec(b.aft_tow_point if b.aft_tow_point is not None else (0.0, 0.0, 0.0))   # none: unused
+    p[BP_REDUCED_DOF] = 1.0 if b.dof == "surge_heave_pitch" else 0.0
     return p
 
 

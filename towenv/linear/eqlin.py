@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from ..core.layout import BP_CB
 
 from ..core.kernels import body_loads, current_at, njit, rotation_matrix
 
@@ -340,7 +341,7 @@ def body_generalised_hydro(b, ang, E, vnode, thdot, zc_node, bp, btab_n, btab, r
     w = np.empty(3)
     for i in range(3):
         w[i] = E[i, 0] * thdot[0] + E[i, 1] * thdot[1] + E[i, 2] * thdot[2]
-    zc = zc_node + lam[0, 2] * bp[b, 7] + lam[1, 2] * bp[b, 8] + lam[2, 2] * bp[b, 9]
+    zc = zc_node + lam[0, 2] * bp[b, BP_CB] + lam[1, 2] * bp[b, BP_CB + 1] + lam[2, 2] * bp[b, BP_CB + 2]
     cur = np.empty(3)
     current_at(zc, cur_z, cur_v, cur)
     f = np.empty(3)

@@ -37,6 +37,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from ..core.layout import BP_AFT_TOW_POINT, BP_CB
 
 from .. import stats as S
 from ..core import kernels as K
@@ -282,7 +283,7 @@ class LinearModel:
         lam = np.empty((3, 3))
         for c, b in self.aft.items():
             K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
-            r[c] = r[s.body_node[b]] + lam.T @ s.bp[b, 26:29]
+            r[c] = r[s.body_node[b]] + lam.T @ s.bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3]
         return r, ang
 
     # ---- nonlinear generalised forces (steady velocities) ---------------------------------------
@@ -329,7 +330,7 @@ class LinearModel:
             K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
             _euler_matrix(ang[b], E)
             vb = lam @ v[a]
-            zc = r[a, 2] + lam[0, 2] * s.bp[b, 7] + lam[1, 2] * s.bp[b, 8] + lam[2, 2] * s.bp[b, 9]
+            zc = r[a, 2] + lam[0, 2] * s.bp[b, BP_CB] + lam[1, 2] * s.bp[b, BP_CB + 1] + lam[2, 2] * s.bp[b, BP_CB + 2]
             K.current_at(zc, s.cur_z, s.cur_v, cur)
             K.body_loads(b, lam, vb, w0, s.bp, s.btab_n, s.btab, s.rho, s.g, cur, fb, mb, bd)
             i = self.node_dof[a]
@@ -350,7 +351,7 @@ class LinearModel:
         lam = np.empty((3, 3))
         J = np.empty((3, 3))
         h = 1e-6
-        rt = s.bp[b, 26:29]
+        rt = s.bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3]
         for j in range(3):
             a1 = ang.copy()
             a1[j] += h

@@ -41,6 +41,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from ..core import layout as L
+from ..core.layout import BP_AFT_TOW_POINT, BP_REDUCED_DOF, BP_TAIL_MASS
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -267,11 +269,16 @@ def _lookup(x, xs, ys):
 
 
 def body_params(sys, b):
-    """The packed parameters of rigid body ``b`` as a dict of named quantities (system.BODY_PARAM layout)."""
+    """The packed parameters of rigid body ``b`` as a dict of named quantities (towenv.core.layout)."""
     p = sys.bp[b]
-    return dict(mass=p[0], volume=p[1], area=p[2], length=p[3], r_G=p[4:7].copy(), r_B=p[7:10].copy(),
-                I_G=p[10:13].copy(), rot_lin=p[13:16].copy(), rot_quad=p[16:19].copy(), lift_slope=p[19],
-                added_mass=p[20:23].copy(), added_inertia=p[23:26].copy(), r_aft=p[26:29].copy())
+
+    def v3(c):
+        return p[c:c + 3].copy()
+
+    return dict(mass=p[L.BP_MASS], volume=p[L.BP_VOLUME], area=p[L.BP_AREA], length=p[L.BP_LENGTH],
+                r_G=v3(L.BP_CG), r_B=v3(L.BP_CB), I_G=v3(L.BP_INERTIA), rot_lin=v3(L.BP_ROT_DAMPING),
+                rot_quad=v3(L.BP_QUAD_ROT_DAMPING), lift_slope=p[L.BP_LIFT_SLOPE], added_mass=v3(L.BP_ADDED_MASS),
+                added_inertia=v3(L.BP_ADDED_INERTIA), r_aft=v3(L.BP_AFT_TOW_POINT))
 
 
 def _coefficients_np(theta, inc, cd, cl, cm):
@@ -471,7 +478,7 @@ def place_aft_nodes_np(sys, r, angs, chart=None):
         c = sys.body_aft_node[b]
         if c >= 0:
             lam = body_rotation_np(angs[b], None if chart is None else chart[b])
-            r[c] = r[sys.body_node[b]] + lam.T @ sys.bp[b, 26:29]
+            r[c] = r[sys.body_node[b]] + lam.T @ sys.bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3]
     return r
 
 
@@ -575,7 +582,7 @@ def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt):
     d = rs[c] - rs[a]
     for k in range(int(sys.node_nseg[c])):
         s = int(sys.node_segs[c, k])
-        kax, kgeo = aft_segment_stiffness_np(sys, s, sys.bp[b, 30], seg.stretched, tens, dt)
+        kax, kgeo = aft_segment_stiffness_np(sys, s, sys.bp[b, BP_TAIL_MASS], seg.stretched, tens, dt)
         if kax == 0.0 and kgeo == 0.0:
             continue
         tt = np.outer(seg.tang[s], seg.tang[s])
@@ -599,7 +606,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     :class:`~towenv.core.simulator.Simulator` or a previous :class:`TwinStep`. Re-charting happens between
     steps (:func:`rechart_np`, as ``kernels.advance`` does). Reduced models as in the kernel: with
     ``settings[8]`` (``solver.planar``) the free nodes keep their lateral coordinate (y row of M̃⁻¹
-    dropped) and every body pitches only; a body with ``bp[b, 29] = 1`` (``dof = "surge_heave_pitch"``)
+    dropped) and every body pitches only; a body with ``bp[b, BP_REDUCED_DOF] = 1`` (``dof = "surge_heave_pitch"``)
     pitches only (A_rr⁻¹ → e_y e_yᵀ/A_rr,yy, roll and yaw held). Nothing of it is modified. The step
     starts from the predictor R* = 3R^t − 3R^{t−1} + R^{t−2} (tow point prescribed) and the tension guess
     max(2T^t − T^{t−1}, 0).
@@ -643,9 +650,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     old_react = np.array(getattr(sim_like, "top_react", np.zeros(3)), float)
     chart = getattr(sim_like, "body_chart", None)
     chart = np.tile(_I3, (sys.body_node.shape[0], 1, 1)) if chart is None else np.array(chart, float)
-    # reduced models: vertical plane (settings[8]) and pitch-only bodies (bp[:, 29])
+    # reduced models: vertical plane (settings[8]) and pitch-only bodies (bp[:, BP_REDUCED_DOF])
     planar = settings.shape[0] > 8 and settings[8] != 0.0
-    reduced = planar | (sys.bp[:, 29] != 0.0) if sys.bp.shape[0] else np.zeros(0, bool)
+    reduced = planar | (sys.bp[:, BP_REDUCED_DOF] != 0.0) if sys.bp.shape[0] else np.zeros(0, bool)
 
     def fail(status, it, elem, maxd):
         return TwinStep(sys, sim_like.settings, hist_r, hist_ang, tens_hist, old_react, status, it, elem, maxd,

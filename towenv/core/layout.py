@@ -1,0 +1,25 @@
+"""Column layout of the rigid-body parameter rows ``System.bp`` (one row per rigid body, float64): the only
+place the column numbers are written. Kernels and builders index with these names (numba treats them as
+compile-time constants, so the compiled code is the same as with bare numbers); a 3-vector starts at its
+name (``bp[b, BP_CG:BP_CG + 3]``, ``bp[b, BP_CG + 1]`` is its y component).
+
+Body axes, tow point at the origin (docs/model-notes.md)."""
+
+BP_MASS = 0                 # kg
+BP_VOLUME = 1               # m^3 (buoyancy)
+BP_AREA = 2                 # m^2, reference area of the coefficient tables
+BP_LENGTH = 3               # m, reference length of the moment coefficients
+BP_CG = 4                   # 4-6: centre of gravity r_G, m
+BP_CB = 7                   # 7-9: centre of buoyancy r_B, m
+BP_INERTIA = 10             # 10-12: principal moments of inertia about G, kg m^2
+BP_ROT_DAMPING = 13         # 13-15: linear rotational damping coefficients
+BP_QUAD_ROT_DAMPING = 16    # 16-18: quadratic rotational damping coefficients
+BP_LIFT_SLOPE = 19          # lift-curve slope at zero incidence, per rad
+BP_ADDED_MASS = 20          # 20-22: added mass (diagonal, at the tow point), kg
+BP_ADDED_INERTIA = 23       # 23-25: added inertia (diagonal), kg m^2
+BP_AFT_TOW_POINT = 26       # 26-28: aft tow point (series tows), m
+BP_REDUCED_DOF = 29         # 1: surge/heave/pitch only (roll and yaw held), 0: 6 DOF
+BP_TAIL_MASS = 30           # mass hanging from the aft tow point (series tows), kg
+BODY_PARAM = 31             # columns in a row
+
+__all__ = [n for n in dir() if n.startswith("BP_")] + ["BODY_PARAM"]
