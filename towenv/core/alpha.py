@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from .layout import S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_RELATIVE_TOLERANCE, S_TOLERANCE
 
 from . import kernels as K
 from .explicit import ExplicitSimulator, _rates
@@ -270,7 +271,7 @@ def _check(st_tr, topo, segp, max_strain, nb):
         if math.sqrt(dx * dx + dy * dy + dz * dz) / l0[s] - 1.0 > max_strain:
             return K.FAIL_STRETCH, s
     for b in range(nb):
-        if not (abs(ang1[b, 1]) <= 1.48):
+        if not (abs(ang1[b, 1]) <= K.PITCH_LIMIT):
             return K.FAIL_ANGLE, b
     return K.OK, -1
 
@@ -307,10 +308,10 @@ def _one_step(h, co, settings, top_node, top_r, top_v, topo, segp, bodyp, env, c
               col_ptr, col_grp, infl_ptr, infl_idx, ab, kl, ku, piv, jstate, counters):
     """One step of size ``h`` from ``st``; on success the trial ``tr`` holds the new state.
     Returns (status, element, iterations, last force residual)."""
-    tol = settings[0]
-    rtol = settings[1]
-    maxit = int(settings[2])
-    atol = max(settings[4], 1e-300)
+    tol = settings[S_TOLERANCE]
+    rtol = settings[S_RELATIVE_TOLERANCE]
+    maxit = int(settings[S_MAX_ITERATIONS])
+    atol = max(settings[S_ANGLE_TOLERANCE], 1e-300)
     r, v, acc, fpr, ang, dang, aacc, afpr = st
     acc1 = tr[2]
     aacc1 = tr[6]
@@ -375,7 +376,7 @@ def _one_step(h, co, settings, top_node, top_r, top_v, topo, segp, bodyp, env, c
                 jstate[0] = 0.0
                 return K.FAIL_NEWTON, _worst(R, gk), it, fres
             jstate[0] = 0.0             # slow contraction: rebuild the Jacobian at the current iterate
-    status, el = _check(tr, topo, segp, settings[3], nb)
+    status, el = _check(tr, topo, segp, settings[S_MAX_STRAIN], nb)
     return status, el, it, fres
 
 
@@ -386,7 +387,7 @@ def alpha_advance(n_steps, dt, top_path, top_prev, co, settings, top_node, topo,
     """Advance ``n_steps`` steps of ``dt``; ``top_path[k]`` is the tow point at the end of step k and
     ``top_prev`` at the start. A failing step is retried as 2, 4, … 2^max_step_cuts sub-steps.
     Returns (status, step, element, last force residual); on failure ``st`` is the last good step."""
-    max_cuts = int(settings[5])
+    max_cuts = int(settings[S_MAX_STEP_CUTS])
     prev = np.empty(3)
     top_r = np.empty(3)
     top_v = np.empty(3)

@@ -243,7 +243,7 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
                 _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                 return K.FAIL_STRETCH, k, s
         for b in range(nb):
-            if abs(ang[b, 1]) > 1.48 or not math.isfinite(ang[b, 1]):
+            if abs(ang[b, 1]) > K.PITCH_LIMIT or not math.isfinite(ang[b, 1]):
                 _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                 return K.FAIL_ANGLE, k, b
     return K.OK, -1, -1

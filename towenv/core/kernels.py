@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from .layout import S_ANGLE_TOLERANCE, S_AS_PUBLISHED, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH, S_RELATIVE_TOLERANCE, S_TOLERANCE
 from .layout import BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG, BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_REDUCED_DOF, BP_ROT_DAMPING, BP_TAIL_MASS, BP_VOLUME
 from numba import njit as _njit
 
@@ -53,6 +54,9 @@ RETRY_CONTACT = 11     # houbolt_step(): the sheave's end-stop contact state cha
 # step is re-charted (its local Euler angles restart from zero). Default of ``settings[7]``
 # (``SolverSettings.rechart_pitch``) when the settings array is shorter.
 RECHART_PITCH = math.pi / 6.0
+# pitch (rad, ~85°) inside a body's attitude chart at which a step fails (FAIL_ANGLE): the Euler-angle
+# singularity guard of every scheme
+PITCH_LIMIT = 1.48
 
 # heave compensator parameter layout (float64[16])
 C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_TRIAL, C_UNUSED, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
@@ -63,6 +67,8 @@ COMP_PASSIVE, COMP_LOCKED, COMP_POSITION, COMP_FORCE = 1, 2, 3, 4
 W_MODE, W_VCMD, W_VMAX, W_AMAX, W_LMIN, W_LMAX, W_TSET, W_GAIN, W_DEADBAND, W_SEG, W_LNOM = range(11)
 WS_V, WS_LEN, WS_PAID = range(3)
 WINCH_SPEED, WINCH_TENSION = 1, 2
+# array sizes (the layouts above name fewer slots; the rest is spare)
+COMP_SIZE, COMP_STATE_SIZE, WINCH_SIZE, WINCH_STATE_SIZE = 16, 8, 12, 4
 
 
 # ----------------------------------------------------------------------------------------------
@@ -1046,15 +1052,15 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     l0, diam, mu, cn, ct, can, cat, ea = segp
     bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca = bodyp
     rho, g, cur_z, cur_v = env
-    tol_abs = settings[0]
-    tol_rel = settings[1]
-    maxit = int(settings[2])
-    max_strain = settings[3]
-    ang_tol = settings[4]
+    tol_abs = settings[S_TOLERANCE]
+    tol_rel = settings[S_RELATIVE_TOLERANCE]
+    maxit = int(settings[S_MAX_ITERATIONS])
+    max_strain = settings[S_MAX_STRAIN]
+    ang_tol = settings[S_ANGLE_TOLERANCE]
     # 2-D vertical-plane model (solver.planar): lateral node DOF and body roll/yaw frozen
-    planar = settings.shape[0] > 8 and settings[8] != 0.0
+    planar = settings.shape[0] > S_PLANAR and settings[S_PLANAR] != 0.0
     # Newton stopping on the estimated remaining error (solver.newton_stop = "estimate")
-    stop_estimate = settings.shape[0] > 9 and settings[9] != 0.0
+    stop_estimate = settings.shape[0] > S_NEWTON_ESTIMATE and settings[S_NEWTON_ESTIMATE] != 0.0
     prev_d = 0.0
     prev_a = 0.0
     hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
@@ -1259,7 +1265,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                             for k2 in range(node_nseg[a]):
                                 kb[a, k, k2] = 0.0
                                 kb[a, k2, k] = 0.0
-        if settings[6] == 1.0:
+        if settings[S_AS_PUBLISHED] == 1.0:
             if not thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, dT,
                                           gres):
                 return FAIL_NEWTON, it, -1, 0.0
@@ -1309,7 +1315,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 if not (dd <= dang_max):
                     dang_max = dd
                 angs[b, i] = na
-            if abs(angs[b, 1]) > 1.48:     # ~85 deg in the chart: only if re-charting (advance) could not keep up
+            if abs(angs[b, 1]) > PITCH_LIMIT:     # ~85 deg in the chart: only if re-charting (advance) could not keep up
                 return FAIL_ANGLE, it, b, maxd
         if not math.isfinite(dang_max):
             return FAIL_NAN, it, -1, maxd
@@ -1519,7 +1525,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
     s_hist_r, s_hist_ang, s_tens, s_cstate = saved
     l0 = segp[0]
-    max_cuts = int(settings[5])
+    max_cuts = int(settings[S_MAX_STEP_CUTS])
     nn = hist_r.shape[1]
     nb = hist_ang.shape[1]
     ns = tens_hist.shape[1]
@@ -1528,7 +1534,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     rc_lam0 = np.empty((3, 3))
     rc_new = np.empty((3, 3))
     rc_tmp = np.empty(3)
-    rc_pitch = settings[7] if settings.shape[0] > 7 else RECHART_PITCH
+    rc_pitch = settings[S_RECHART_PITCH] if settings.shape[0] > S_RECHART_PITCH else RECHART_PITCH
     wmode = int(winch[W_MODE])
     wseg = int(winch[W_SEG])
     flow = ws[40]

@@ -22,4 +22,20 @@ BP_REDUCED_DOF = 29         # 1: surge/heave/pitch only (roll and yaw held), 0: 
 BP_TAIL_MASS = 30           # mass hanging from the aft tow point (series tows), kg
 BODY_PARAM = 31             # columns in a row
 
-__all__ = [n for n in dir() if n.startswith("BP_")] + ["BODY_PARAM"]
+
+# ------------------------------------------------------------------------------------------------------
+# solver settings array (SolverSettings.array(), float64): what the kernels read of the scene's [solver]
+# ------------------------------------------------------------------------------------------------------
+S_TOLERANCE = 0             # N, absolute tension change that ends Newton
+S_RELATIVE_TOLERANCE = 1
+S_MAX_ITERATIONS = 2
+S_MAX_STRAIN = 3
+S_ANGLE_TOLERANCE = 4       # rad
+S_MAX_STEP_CUTS = 5
+S_AS_PUBLISHED = 6          # 1: the thesis's tension recursion instead of the tree solve
+S_RECHART_PITCH = 7         # rad (optional: shorter arrays use kernels.RECHART_PITCH)
+S_PLANAR = 8                # 1: vertical-plane model (optional)
+S_NEWTON_ESTIMATE = 9       # 1: newton_stop = "estimate" (optional)
+SETTINGS_SIZE = 10
+
+__all__ = [n for n in dir() if n.startswith(("BP_", "S_"))] + ["BODY_PARAM", "SETTINGS_SIZE"]

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Callable, NamedTuple
 
 import numpy as np
+from . import layout as L
 from .layout import BP_AFT_TOW_POINT, BP_CB, BP_CG, BP_REDUCED_DOF
 
 from ..errors import SimulationDivergence
@@ -74,10 +75,18 @@ class SolverSettings:
             raise ValueError(f"rechart_pitch: must be within [0, 1.2] rad (got {self.rechart_pitch!r})")
         if self.newton_stop not in ("change", "estimate"):
             raise ValueError(f"solver.newton_stop: must be 'change' or 'estimate' (got {self.newton_stop!r})")
-        return np.array([self.tolerance, self.relative_tolerance, self.max_iterations, self.max_strain,
-                         self.angle_tolerance, self.max_step_cuts,
-                         1.0 if self.tension_solve == "as_published" else 0.0, self.rechart_pitch,
-                         1.0 if self.planar else 0.0, 1.0 if self.newton_stop == "estimate" else 0.0], float)
+        a = np.empty(L.SETTINGS_SIZE)
+        a[L.S_TOLERANCE] = self.tolerance
+        a[L.S_RELATIVE_TOLERANCE] = self.relative_tolerance
+        a[L.S_MAX_ITERATIONS] = self.max_iterations
+        a[L.S_MAX_STRAIN] = self.max_strain
+        a[L.S_ANGLE_TOLERANCE] = self.angle_tolerance
+        a[L.S_MAX_STEP_CUTS] = self.max_step_cuts
+        a[L.S_AS_PUBLISHED] = 1.0 if self.tension_solve == "as_published" else 0.0
+        a[L.S_RECHART_PITCH] = self.rechart_pitch
+        a[L.S_PLANAR] = 1.0 if self.planar else 0.0
+        a[L.S_NEWTON_ESTIMATE] = 1.0 if self.newton_stop == "estimate" else 0.0
+        return a
 
 
 class KernelData(NamedTuple):
@@ -152,10 +161,10 @@ class Simulator:
             raise ValueError("solver.tension_solve: 'as_published' (the thesis recursion) handles a single chain "
                              "only (no junctions or series bodies)")
         self._check_reduced_models()
-        self.comp = np.zeros(16)
-        self.winch = np.zeros(12)
-        self.wstate = np.zeros(4)
-        self.cstate = np.zeros(8)
+        self.comp = np.zeros(K.COMP_SIZE)
+        self.winch = np.zeros(K.WINCH_SIZE)
+        self.wstate = np.zeros(K.WINCH_STATE_SIZE)
+        self.cstate = np.zeros(K.COMP_STATE_SIZE)
         self._allocate()
         self._setup_actuators()
         self._initial_state()

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from ..core.layout import S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RELATIVE_TOLERANCE, S_TOLERANCE
 from ..core import layout as L
 from ..core.layout import BP_AFT_TOW_POINT, BP_REDUCED_DOF, BP_TAIL_MASS
 import scipy.sparse as sp
@@ -640,9 +641,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     """
     sys = sim_like.system
     settings = _settings_array(sim_like.settings)
-    tol_abs, tol_rel, maxit, max_strain, ang_tol = (settings[0], settings[1], int(settings[2]), settings[3],
-                                                    settings[4])
-    stop_estimate = settings.shape[0] > 9 and settings[9] != 0.0
+    tol_abs, tol_rel, maxit, max_strain, ang_tol = (settings[S_TOLERANCE], settings[S_RELATIVE_TOLERANCE], int(settings[S_MAX_ITERATIONS]), settings[S_MAX_STRAIN],
+                                                    settings[S_ANGLE_TOLERANCE])
+    stop_estimate = settings.shape[0] > S_NEWTON_ESTIMATE and settings[S_NEWTON_ESTIMATE] != 0.0
     prev_d = prev_a = 0.0
     hist_r = np.array(sim_like.hist_r, float)
     hist_ang = np.array(sim_like.hist_ang, float)
@@ -651,7 +652,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     chart = getattr(sim_like, "body_chart", None)
     chart = np.tile(_I3, (sys.body_node.shape[0], 1, 1)) if chart is None else np.array(chart, float)
     # reduced models: vertical plane (settings[8]) and pitch-only bodies (bp[:, BP_REDUCED_DOF])
-    planar = settings.shape[0] > 8 and settings[8] != 0.0
+    planar = settings.shape[0] > S_PLANAR and settings[S_PLANAR] != 0.0
     reduced = planar | (sys.bp[:, BP_REDUCED_DOF] != 0.0) if sys.bp.shape[0] else np.zeros(0, bool)
 
     def fail(status, it, elem, maxd):
@@ -790,7 +791,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             if reduced[b]:
                 new_angs[b, [0, 2]] = hist_ang[0, b, [0, 2]]      # roll and yaw held
             dang_max = max(dang_max, float(np.max(np.abs(new_angs[b] - angs[b]))))
-            if abs(new_angs[b, 1]) > 1.48:
+            if abs(new_angs[b, 1]) > 1.48:  # kernels.PITCH_LIMIT, kept literal: the twin is independent
                 return fail(FAIL_ANGLE, it, b, maxd)
         if not math.isfinite(dang_max):
             return fail(FAIL_NAN, it, -1, maxd)
