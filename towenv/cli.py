@@ -180,7 +180,7 @@ OUTPUT_FILES = ("result.npz", "timeseries.csv", "summary.json", "summary.md")
 
 def cmd_simulate(args) -> int:
     from .atomic import atomic_write, check_output_dir
-    from .core.run import make_simulator, plan_records, simulate
+    from .core.run import kernels_compiled, make_simulator, plan_records, simulate
     from .errors import SimulationDivergence
     from .report import default_discard, summarize, summary_markdown, write_timeseries_csv
     from .scene import SceneError
@@ -244,6 +244,9 @@ def cmd_simulate(args) -> int:
               file=sys.stderr)
     if choice is not None and not args.quiet:
         print(f"fidelity: {choice.summary()} — {choice.reason} (docs/fidelity.md)", file=sys.stderr)
+    if not args.quiet and not kernels_compiled():
+        print("towenv: compiling the simulator kernels (first run after installing or updating: about a minute; "
+              "cached afterwards) — the progress bar starts moving once they are compiled", file=sys.stderr)
     try:
         res = simulate(sim, duration, progress=not args.quiet)
     except SimulationDivergence as exc:

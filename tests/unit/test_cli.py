@@ -158,3 +158,17 @@ def test_bad_discard_exit_2(tmp_path, capsys):
 def test_python_dash_m():
     p = subprocess.run([sys.executable, "-m", "towenv", "scenes"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0 and "two_part_tow_1" in p.stdout
+
+
+def test_first_run_announces_the_compilation(tmp_path, monkeypatch, capsys):
+    """Issue 15 (first use): with a cold numba cache the CLI says that it compiles, before the progress bar."""
+    import towenv
+    import towenv.core.run as run
+    towenv.Simulator("two_part_tow_1").advance(0.1)      # compiles (or loads) kernels.advance
+    assert run.kernels_compiled()
+    monkeypatch.setattr(run, "kernels_compiled", lambda: False)
+    assert main(["simulate", "two_part_tow_1", "--duration", "0.4", "--out", str(tmp_path / "o"), "--no-plots"]) == 0
+    assert "compiling the simulator kernels" in capsys.readouterr().err
+    monkeypatch.setattr(run, "kernels_compiled", lambda: True)
+    assert main(["simulate", "two_part_tow_1", "--duration", "0.4", "--out", str(tmp_path / "p"), "--no-plots"]) == 0
+    assert "compiling" not in capsys.readouterr().err

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -87,6 +88,19 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
                      else sim.scene.get("name"), "dt": dt, "duration": n_steps * dt, "wall_time_s": wall,
                      "real_time_factor": n_steps * dt / wall if wall > 0 else float("inf"), **sim.stats})
     return res
+
+
+def kernels_compiled() -> bool:
+    """Whether numba's on-disk cache already holds the compiled time-step kernel (``kernels.advance``) for
+    this Python; False on the first run after an install or an update, when compiling takes about a minute
+    (numba caches next to the sources, or under ``NUMBA_CACHE_DIR``)."""
+    import sys
+    from . import kernels
+    tag = f"py{sys.version_info.major}{sys.version_info.minor}"
+    dirs = [Path(kernels.__file__).resolve().parent / "__pycache__"]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        dirs.append(Path(os.environ["NUMBA_CACHE_DIR"]))
+    return any(any(d.rglob(f"kernels.advance-*.{tag}.nbi")) for d in dirs if d.is_dir())
 
 
 def _finite_positive(name, value) -> float:
