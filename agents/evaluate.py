@@ -179,8 +179,8 @@ def seed_set_sentence(seed_set: str, replicates: int) -> str:
 # ------------------------------------------------------------------------------------------ main
 def main(argv=None):
     args = parse_args(argv)
-    from towenv.extras import require_extra
-    require_extra("rl", "evaluate.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
+    from towenv.extras import RL_COMMAND_MODULES, require_extra
+    require_extra("rl", "evaluate.py", RL_COMMAND_MODULES)
     import torch
     torch.set_num_threads(1)
     from agents.aggregate import across_seeds, seed_groups

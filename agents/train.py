@@ -43,8 +43,8 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_
 
 
 if __name__ == "__main__":          # before the SB3 callback classes below are defined
-    from towenv.extras import require_extra
-    require_extra("rl", "train.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
+    from towenv.extras import RL_COMMAND_MODULES, require_extra
+    require_extra("rl", "train.py", RL_COMMAND_MODULES)
 
 
 def parse_args(argv=None):
@@ -149,9 +149,7 @@ def rollout_steps(model) -> int:
 
 
 def main(argv=None):
-    args = parse_args(argv)
-    from towenv.extras import require_extra
-    require_extra("rl", "train.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
+    args = parse_args(argv)       # (SB3 is imported with this module: the extras check is at the top)
     import numpy as np
     import torch
     torch.set_num_threads(max(1, args.threads))

@@ -6,9 +6,9 @@ A thin command line: the code is :mod:`agents.evaluate` (installed with ``pip in
 """
 import sys
 
-from towenv.extras import require_extra
+from towenv.extras import RL_COMMAND_MODULES, require_extra
 
 if __name__ == "__main__":
-    require_extra("rl", "evaluate.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
+    require_extra("rl", "evaluate.py", RL_COMMAND_MODULES)
     from agents.evaluate import main
     sys.exit(main())

@@ -6,9 +6,9 @@ A thin command line: the code is :mod:`agents.train` (installed with ``pip insta
 """
 import sys
 
-from towenv.extras import require_extra
+from towenv.extras import RL_COMMAND_MODULES, require_extra
 
 if __name__ == "__main__":
-    require_extra("rl", "train.py", ("gymnasium", "stable_baselines3", "torch", "yaml"))
+    require_extra("rl", "train.py", RL_COMMAND_MODULES)
     from agents.train import main
     sys.exit(main())

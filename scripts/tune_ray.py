@@ -32,7 +32,6 @@ missing.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import itertools
 import json
 import math
@@ -41,6 +40,9 @@ import re
 import sys
 import time
 from pathlib import Path
+
+from towenv.atomic import atomic_write
+from towenv.extras import RL_COMMAND_MODULES, missing_modules
 
 
 
@@ -163,7 +165,7 @@ def run_trial(cfg: dict, args) -> dict:
 def missing_extras() -> list[str]:
     """The extras this script lacks ("rl": SB3 and friends for train.py, "ray": Ray Tune)."""
     missing = []
-    if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "gymnasium", "yaml")):
+    if missing_modules(RL_COMMAND_MODULES):
         missing.append("rl")
     try:
         import ray  # noqa: F401
@@ -171,13 +173,6 @@ def missing_extras() -> list[str]:
     except ImportError:
         missing.append("ray")
     return missing
-
-
-def _atomic_write(path: Path, text: str):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def _finite_or_none(x):
@@ -303,7 +298,8 @@ def main(argv=None):
     ok = [x for x in rows if x["best_validation_reward"] is not None]
     best = max(ok, key=lambda x: x["best_validation_reward"]) if ok else None
     out = Path(args.log_dir) / "tune_results.json"
-    _atomic_write(out, json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
+    out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(out, json.dumps({"argv": sys.argv[1:] if argv is None else list(argv),
                                    "ray_address": address or "local", "experiment": str(results.experiment_path),
                                    "wall_seconds": round(time.time() - t0, 1),
                                    "best": best["name"] if best else None, "trials": rows},

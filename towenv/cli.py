@@ -228,6 +228,7 @@ def cmd_simulate(args) -> int:
                       + (" or a shorter --discard" if args.discard is not None else ""))
 
     out = Path(args.out) if args.out else Path("out") / _out_name(args.scene, sim.scene)
+    created = not out.exists()
     problem = check_output_dir(out)
     if problem:
         return _error(f"--out {out}: {problem}")
@@ -250,6 +251,11 @@ def cmd_simulate(args) -> int:
     try:
         res = simulate(sim, duration, progress=not args.quiet)
     except SimulationDivergence as exc:
+        if created:                           # the folder made by the pre-run check: do not leave it empty
+            try:
+                out.rmdir()
+            except OSError:
+                pass
         return _error(_one_line(exc))
     res.meta["scene"] = sim.scene.name
     if overrides:

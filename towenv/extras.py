@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 
-__all__ = ["EXTRAS", "missing_modules", "require_extra"]
+__all__ = ["EXTRAS", "RL_COMMAND_MODULES", "missing_modules", "require_extra"]
 
 #: the import names each extra provides (pyproject.toml [project.optional-dependencies])
 EXTRAS = {
@@ -13,6 +13,8 @@ EXTRAS = {
     "peer": ("moordyn",),
     "dev": ("pytest", "hypothesis"),
 }
+#: what the training and evaluation command lines import (the clairvoyant planner's osqp only when used)
+RL_COMMAND_MODULES = ("gymnasium", "stable_baselines3", "torch", "yaml")
 
 
 def missing_modules(modules) -> list[str]:

@@ -6,11 +6,8 @@ scripts/soak_env.py.
 """
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +16,7 @@ pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("yaml")          # rl-zoo YAML hyperparameters (PyYAML; should be in the `rl` extra)
 
-from helpers import REPO
+from helpers import load_script
 
 import gymnasium as gym  # noqa: E402
 
@@ -39,14 +36,6 @@ TUNED = {
     "constant_tension": {"hs0.88_tp4.03": {"gain": 1e-4}, "hs1.88_tp5.90": {"gain": 2e-4}},
 }
 
-
-def _script(name):
-    if name in ("train", "evaluate"):             # the command lines' code lives in the agents package
-        return importlib.import_module(f"agents.{name}")
-    spec = importlib.util.spec_from_file_location(f"towenv_script_{name}", REPO / "scripts" / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 # ---------------------------------------------------------------------------------------- baselines
@@ -152,8 +141,8 @@ def test_hyperparameter_files_parse():
 @pytest.mark.slow
 def test_smoke_train_resume_and_evaluate(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    train = _script("train")
-    evaluate = _script("evaluate")
+    train = load_script("train")
+    evaluate = load_script("evaluate")
     log = tmp_path / "runs"
     export = tmp_path / "ppo_winch.zip"
     common = ["--algo", "ppo", "--env", WINCH, "--seed", "1", "--log-dir", str(log), "--env-kwargs",
@@ -202,14 +191,14 @@ def test_smoke_train_resume_and_evaluate(tmp_path, monkeypatch):
 
 def test_scripts_have_help():
     for name in ("soak_env", "tune_ray"):
-        mod = _script(name)
+        mod = load_script(name)
         with pytest.raises(SystemExit) as e:
             mod.main(["--help"])
         assert e.value.code == 0
 
 
 def test_soak_quick(tmp_path):
-    soak = _script("soak_env")
+    soak = load_script("soak_env")
     assert soak.main(["--env", COMP, "--minutes", "0.03", "--episode-seconds", "10", "--out",
                       str(tmp_path / "soak.json")]) == 0
     s = json.loads((tmp_path / "soak.json").read_text())[0]

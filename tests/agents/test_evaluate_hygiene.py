@@ -3,7 +3,6 @@ no-verdict rule, the fresh ``final`` wave-seed set, and aggregation across train
 stratified bootstrap, checked against rliable when it runs and against hand-computed cases)."""
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import os
@@ -16,23 +15,15 @@ import pytest
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from helpers import REPO
+from helpers import REPO, load_script
 WINCH = "towenv/WinchPayout-v0"
 COMP = "towenv/CompensatorGains-v0"
 
 
-def _script(name):
-    if name in ("train", "evaluate"):             # the command lines' code lives in the agents package
-        return importlib.import_module(f"agents.{name}")
-    spec = importlib.util.spec_from_file_location(f"towenv_script_{name}_hygiene", REPO / "scripts" / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
 
 @pytest.fixture(scope="module")
 def evaluate():
-    return _script("evaluate")
+    return load_script("evaluate")
 
 
 def _tmp_leftovers(folder: Path):
@@ -197,7 +188,7 @@ def test_evaluate_prints_no_verdict(tmp_path, monkeypatch, capsys, evaluate):
 def test_final_seed_set_is_fresh(env_id, evaluate):
     from agents.evaluation import eval_episodes, make_eval_env
     from agents.tuning import TUNING_SEED_OFFSET, tuning_seas
-    train = _script("train")
+    train = load_script("train")
     env = make_eval_env(env_id, {})
     base = [s for _, s in env.unwrapped.eval_sea_states()]
     eval_seeds = {e[3] for r in range(1, evaluate.MAX_EVAL_REPLICATES + 1) for e in eval_episodes(env, r)}

@@ -25,3 +25,16 @@ def peer_deck(speed=0.0, segments=20, dt=0.05, cda=0.5, **solver):
         bodies=[dict(name="ball", kind="ball", mass=500.0, volume=0.1, drag_area=cda, added_mass_coefficient=1.0)],
         solver=dict(dt=dt, **solver),
     )
+
+
+def load_script(name: str):
+    """A command line of the project as a module: ``agents.train`` / ``agents.evaluate`` (their code lives in
+    the installed agents package), else ``scripts/<name>.py`` loaded from the checkout."""
+    import importlib
+    import importlib.util
+    if name in ("train", "evaluate"):
+        return importlib.import_module(f"agents.{name}")
+    spec = importlib.util.spec_from_file_location(f"towenv_script_{name}", REPO / "scripts" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod

@@ -300,6 +300,14 @@ def test_settle_time_and_segments_are_bounded():
         load("two_part_tow_1", {"lines.primary.segments": 4000, "lines.secondary.segments": 2000})
 
 
+def test_divergence_leaves_no_empty_output_folder(tmp_path, capsys):
+    out = tmp_path / "never"
+    code = cli_main(["simulate", "two_part_tow_1", "--duration", "3", "--set", "lines.secondary.segments=300",
+                     "--out", str(out), "-q", "--no-plots"])
+    assert code == 2 and "Courant" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_short_segments_divergence_says_why():
     sim = towenv.make_simulator("two_part_tow_1", **{"lines.secondary.segments": 300})
     with pytest.raises(SimulationDivergence, match="Courant number") as exc:
