@@ -788,7 +788,7 @@ class Line(_Model):
     name: Name
     length: Num(gt=0, unit="m")
     segments: Segments
-    diameter: Num(gt=0, le=1, unit="m")
+    diameter: Num(ge=1e-4, le=1, unit="m")          # 0.1 mm: thinner is not a cable (and its area underflows)
     mass_per_length: Num(gt=0, unit="kg/m")
     EA: Num(gt=0, unit="N")
     cn: Num(ge=0) = 1.2

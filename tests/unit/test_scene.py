@@ -510,3 +510,31 @@ def test_corrupted_scenes_raise_only_scene_error(data):
     else:
         assert isinstance(sc, Scene)
         assert load_scene(sc.to_dict()) == sc
+
+
+@pytest.mark.parametrize("name", ["two_part_tow_1", "series_multitow", "two_part_coastal_ss4", "parallel_multitow"])
+def test_extreme_numbers_in_any_field_give_a_clear_error_or_a_scene(name):
+    """Every numeric field set to a subnormal, a tiny, or a huge value (found by the fuzz test: a 2e-313 m cable
+    diameter passed '> 0' and then divided by zero inside validation)."""
+    base = load_scene(name).to_dict()
+
+    def numeric_paths(d, p=()):
+        if isinstance(d, dict):
+            for k, v in d.items():
+                yield from numeric_paths(v, p + (k,))
+        elif isinstance(d, list):
+            for i, v in enumerate(d):
+                yield from numeric_paths(v, p + (i,))
+        elif isinstance(d, (int, float)) and not isinstance(d, bool):
+            yield p
+
+    for path in numeric_paths(base):
+        for value in (5e-324, 1e-310, 1e-300, 1e300, -1e300):
+            d = copy.deepcopy(base)
+            _get(d, path[:-1])[path[-1]] = value
+            try:
+                sc = load_scene(d)
+            except SceneError as err:
+                assert INTERNAL not in str(err), (path, value, str(err))
+            else:
+                assert isinstance(sc, Scene)
