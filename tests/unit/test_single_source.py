@@ -36,9 +36,11 @@ def test_build_system_reads_the_validated_scene():
     from towenv.scene import RigidBody
     rigid = [i for i, bd in enumerate(d["bodies"]) if bd.get("kind") in ("fish", "depressor")]
     assert rigid
-    assert np.allclose(b.bodyp()[0][0, 13:16], RigidBody.model_fields["rotational_damping"].default)
-    assert np.array_equal(a.bodyp()[0], b.bodyp()[0])
-    assert np.array_equal(a.segp()[0], b.segp()[0]) and a.rho == b.rho and a.g == b.g
+    from towenv.core.layout import BP_ROT_DAMPING
+    assert np.allclose(b.bodyp().bp[0, BP_ROT_DAMPING:BP_ROT_DAMPING + 3],
+                       RigidBody.model_fields["rotational_damping"].default)
+    assert np.array_equal(a.bodyp().bp, b.bodyp().bp)
+    assert np.array_equal(a.segp().l0, b.segp().l0) and a.rho == b.rho and a.g == b.g
 
 
 def test_body_parameter_columns_are_named_outside_the_layout():
@@ -54,3 +56,40 @@ def test_body_parameter_columns_are_named_outside_the_layout():
     from towenv.core import layout
     cols = sorted(v for k, v in vars(layout).items() if k.startswith("BP_"))
     assert cols[-1] == layout.BODY_PARAM - 1 and len(set(cols)) == len(cols)
+
+
+def test_kernel_structures_are_read_by_name():
+    """Issue 16, item 1: the kernels' structures (towenv.core.model) are read by field name — no positional
+    index into the topology, segment, body, water, state, work, saved-step, α-state or gathered tuples, and
+    no raw counter numbers, in the modules that handle them (core, envs, verification, linear)."""
+    import re
+    from pathlib import Path
+    root = Path(system.__file__).resolve().parents[1]
+    raw = re.compile(r"\b(topo|segp|bodyp|env|state|ws|work|saved|st|tr|st_tr|bk|g|counters|_ws|_state|_saved|_tr|_st)"
+                     r"(\(\))?\[\d")
+    files = [p for d in ("core", "envs", "verification", "linear") for p in (root / d).rglob("*.py")]
+    hits = [f"{p.relative_to(root)}:{i}: {line.strip()}" for p in files if p.name != "layout.py"
+            for i, line in enumerate(p.read_text().splitlines(), 1) if raw.search(line) and "``" not in line
+            and not line.lstrip().startswith("#")]
+    assert not hits, hits
+
+
+def test_model_structures_match_the_arrays_they_name():
+    """Each named structure holds what its fields say, for a scene with junction, bodies and a sea."""
+    from towenv.core import model
+    sim = towenv.make_simulator("two_part_coastal_ss4")
+    s = sim.system
+    kd = sim.kernel_data()
+    top_node, topo, seg, bodies, water = kd.args
+    assert isinstance(topo, model.Topology) and topo.seg_lo is s.seg_lo and topo.body_aft_node is s.body_aft_node
+    assert isinstance(seg, model.Segments) and seg.ea is s.ea and seg.l0 is s.l0
+    assert isinstance(bodies, model.Bodies) and bodies.bp is s.bp and bodies.pb_ca is s.pb_ca
+    assert isinstance(water, model.Water) and water.rho == s.rho and water.cur_v is s.cur_v
+    assert isinstance(kd.state, model.TimeLevels) and kd.state.hist_r is sim.hist_r and kd.state.chart is sim.body_chart
+    w = kd.work
+    assert isinstance(w, model.HouboltWork)
+    nn, ns, nb = s.n_nodes, s.n_segments, s.n_rigid
+    assert w.tang.shape == (ns, 3) and w.kb.shape == (nn, model.MAX_SEGS_PER_NODE, model.MAX_SEGS_PER_NODE)
+    assert w.blam.shape == (nb, 3, 3) and w.flow.shape == (nn, 3) and w.bkc.shape == (max(nb, 1), 9)
+    assert isinstance(kd.saved, model.SavedStep) and kd.saved.hist_r.shape == sim.hist_r.shape
+    assert isinstance(kd.wave, model.WaveField)

@@ -46,8 +46,10 @@ import math
 
 import numpy as np
 from .layout import S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_RELATIVE_TOLERANCE, S_TOLERANCE
+from .layout import N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS, N_STEP_CUTS
 
 from . import kernels as K
+from .model import AlphaState, AlphaTrial
 from .explicit import ExplicitSimulator, _rates
 from .simulator import load
 
@@ -99,12 +101,13 @@ def principal_root(omega_dt: float, method: str = "generalized_alpha", rho_inf: 
 def _residual(h, co, top_node, top_r, top_v, topo, segp, bodyp, env, c_axial, ws, st, tr, gk, gi, R):
     """Residual of the α-weighted equation at the trial accelerations (``tr``); returns
     (ok, max force imbalance N, max Euler-angle error rad)."""
-    r, v, acc, fpr, ang, dang, aacc, afpr = st
-    r1, v1, acc1, ang1, dang1, omg1, aacc1, out_a, out_dang, out_domg, qdd, tens = tr
+    r, v, acc, fpr, ang, dang, aacc, afpr = st.r, st.v, st.acc, st.fpr, st.ang, st.dang, st.aacc, st.afpr
+    r1, v1, acc1, ang1, dang1, omg1, aacc1 = tr.r1, tr.v1, tr.acc1, tr.ang1, tr.dang1, tr.omg1, tr.aacc1
+    out_a, out_dang, out_domg, qdd, tens = tr.out_a, tr.out_dang, tr.out_domg, tr.qdd, tr.tens
     am, af, beta, gamma = co[0], co[1], co[2], co[3]
     nn = r.shape[0]
     nb = ang.shape[0]
-    node_kind = topo[3]
+    node_kind = topo.node_kind
     c1 = h * h * (0.5 - beta)
     c2 = h * h * beta
     c3 = h * (1.0 - gamma)
@@ -131,7 +134,7 @@ def _residual(h, co, top_node, top_r, top_v, topo, segp, bodyp, env, c_axial, ws
         return False, np.inf, np.inf
     for b in range(nb):
         K.omega_dot_to_euler_acc(ang1[b], dang1[b], omg1[b], out_domg[b], qdd[b])
-    mnode = ws[5]
+    mnode = ws.mnode
     fmax = 0.0
     amax = 0.0
     for p in range(gk.shape[0]):
@@ -156,9 +159,9 @@ def _residual(h, co, top_node, top_r, top_v, topo, segp, bodyp, env, c_axial, ws
 def _jacobian(h, co, top_node, top_r, top_v, topo, segp, bodyp, env, c_axial, ws, st, tr, gk, gi, R0, Rp,
               col_ptr, col_grp, infl_ptr, infl_idx, ab, kl):
     """Finite-difference Jacobian dR/da (band storage ``ab[i, j − i + kl]``), columns coloured."""
-    acc1 = tr[2]
-    aacc1 = tr[6]
-    r1 = tr[0]
+    acc1 = tr.acc1
+    aacc1 = tr.aacc1
+    r1 = tr.r1
     c2 = h * h * co[2]
     ab[:] = 0.0
     ncol = col_ptr.shape[0] - 1
@@ -255,15 +258,16 @@ def band_solve(ab, kl, ku, piv, b):
 @njit(cache=True)
 def _check(st_tr, topo, segp, max_strain, nb):
     """Failure checks of a converged trial state: (status, element)."""
-    r1 = st_tr[0]
-    ang1 = st_tr[3]
+    r1 = st_tr.r1
+    v1 = st_tr.v1
+    ang1 = st_tr.ang1
     for a in range(r1.shape[0]):
         for i in range(3):
-            if not math.isfinite(r1[a, i]) or not math.isfinite(st_tr[1][a, i]):
+            if not math.isfinite(r1[a, i]) or not math.isfinite(v1[a, i]):
                 return K.FAIL_NAN, a
-    l0 = segp[0]
-    seg_lo = topo[0]
-    seg_up = topo[1]
+    l0 = segp.l0
+    seg_lo = topo.seg_lo
+    seg_up = topo.seg_up
     for s in range(l0.shape[0]):
         dx = r1[seg_up[s], 0] - r1[seg_lo[s], 0]
         dy = r1[seg_up[s], 1] - r1[seg_lo[s], 1]
@@ -312,10 +316,10 @@ def _one_step(h, co, settings, top_node, top_r, top_v, topo, segp, bodyp, env, c
     rtol = settings[S_RELATIVE_TOLERANCE]
     maxit = int(settings[S_MAX_ITERATIONS])
     atol = max(settings[S_ANGLE_TOLERANCE], 1e-300)
-    r, v, acc, fpr, ang, dang, aacc, afpr = st
-    acc1 = tr[2]
-    aacc1 = tr[6]
-    tens = tr[11]
+    r, v, acc, fpr, ang, dang, aacc, afpr = st.r, st.v, st.acc, st.fpr, st.ang, st.dang, st.aacc, st.afpr
+    acc1 = tr.acc1
+    aacc1 = tr.aacc1
+    tens = tr.tens
     nb = ang.shape[0]
     n = R.shape[0]
     # predictor: constant (algorithmic) acceleration
@@ -348,7 +352,7 @@ def _one_step(h, co, settings, top_node, top_r, top_v, topo, segp, bodyp, env, c
                 return K.FAIL_NEWTON, -1, it, fres
             jstate[0] = 1.0
             jstate[1] = h
-            counters[4] += 1
+            counters[N_RECHARTS] += 1
             fresh = True
         band_solve(ab, kl, ku, piv, R)
         for i in range(n):
@@ -405,7 +409,7 @@ def alpha_advance(n_steps, dt, top_path, top_prev, co, settings, top_node, topo,
             nsub = 1 << cut
             h = dt / nsub
             if cut > 0:
-                counters[3] += 1
+                counters[N_STEP_CUTS] += 1
                 for q in range(len(st)):
                     st[q][:] = bk[q]
             status = K.OK
@@ -415,21 +419,21 @@ def alpha_advance(n_steps, dt, top_path, top_prev, co, settings, top_node, topo,
                 status, el, it, fres = _one_step(h, co, settings, top_node, top_r, top_v, topo, segp, bodyp, env,
                                                  c_axial, ws, st, tr, gk, gi, R, R0, col_ptr, col_grp, infl_ptr,
                                                  infl_idx, ab, kl, ku, piv, jstate, counters)
-                counters[1] += it
-                if it > counters[2]:
-                    counters[2] = it
+                counters[N_ITERATIONS] += it
+                if it > counters[N_MAX_ITERATIONS]:
+                    counters[N_MAX_ITERATIONS] = it
                 if status != K.OK:
                     break
                 # commit: the converged trial becomes the state; f at it is the next step's f₀
-                st[0][:] = tr[0]
-                st[1][:] = tr[1]
-                st[2][:] = tr[2]
-                st[3][:] = tr[7]
-                st[4][:] = tr[3]
-                st[5][:] = tr[4]
-                st[6][:] = tr[6]
-                st[7][:] = tr[10]
-                counters[0] += 1
+                st.r[:] = tr.r1
+                st.v[:] = tr.v1
+                st.acc[:] = tr.acc1
+                st.fpr[:] = tr.out_a
+                st.ang[:] = tr.ang1
+                st.dang[:] = tr.dang1
+                st.aacc[:] = tr.aacc1
+                st.afpr[:] = tr.qdd
+                counters[N_STEPS] += 1
             if status == K.OK:
                 break
         if status != K.OK:
@@ -575,10 +579,9 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
         self.xacc, self.xf = z((nn, 3)), z((nn, 3))
         self.xaacc, self.xaf = z((nb, 3)), z((nb, 3))
         # state tuple (positions, velocities, accelerations, f) of nodes, then the same of the body angles
-        self._st = (self.xr, self.xv, self.xacc, self.xf, self.xang, self.xdang, self.xaacc, self.xaf)
-        self._bk = tuple(a.copy() for a in self._st)
-        self._tr = (z((nn, 3)), z((nn, 3)), z((nn, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)),
-                    z((nn, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)), z(s.n_segments))
+        self._st = AlphaState(self.xr, self.xv, self.xacc, self.xf, self.xang, self.xdang, self.xaacc, self.xaf)
+        self._bk = AlphaState(*(a.copy() for a in self._st))
+        self._tr = AlphaTrial.allocate(nn, s.n_segments, nb)
         st = _structure(s)
         self._gk, self._gi = st["gk"], st["gi"]
         self._kl, self._ku = st["kl"], st["ku"]
@@ -614,13 +617,13 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
         for b in range(s.n_rigid):
             K.euler_rates_to_omega(self.xang[b], self.xdang[b], self.xomg[b])
         ok = _rates(self.xr, self.xv, self.xang, self.xomg, self.xr[s.top_node].copy(), self.xv[s.top_node].copy(),
-                    s.topo(), s.segp(), s.bodyp(), s.env(), self.axial_damping, self._xws, tr[7], tr[8], tr[9],
+                    s.topo(), s.segp(), s.bodyp(), s.env(), self.axial_damping, self._xws, tr.out_a, tr.out_dang, tr.out_domg,
                     self.xtens)
         if not ok:
-            return np.full_like(tr[7], np.nan), np.full_like(tr[10], np.nan)
+            return np.full_like(tr.out_a, np.nan), np.full_like(tr.qdd, np.nan)
         for b in range(s.n_rigid):
-            K.omega_dot_to_euler_acc(self.xang[b], self.xdang[b], self.xomg[b], tr[9][b], tr[10][b])
-        return tr[7].copy(), tr[10].copy()
+            K.omega_dot_to_euler_acc(self.xang[b], self.xdang[b], self.xomg[b], tr.out_domg[b], tr.qdd[b])
+        return tr.out_a.copy(), tr.qdd.copy()
 
     def _run(self, tops, dt, t_start):
         if not hasattr(self, "_ga_initial"):
@@ -632,12 +635,12 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
                                         s.segp(), s.bodyp(), s.env(), self.axial_damping, self._xws, self._st,
                                         self._tr, self._bk, self._gk, self._gi, self._R, self._R0, *self._col,
                                         self._ab, self._kl, self._ku, self._piv, self._jstate, self._acnt)
-        self.counters[:4] = self._acnt[:4]
+        self.counters[:N_RECHARTS] = self._acnt[:N_RECHARTS]    # every counter but the re-charts
         # body rates and tensions of the state (after a failure: of the last good step, re-evaluated)
         for b in range(s.n_rigid):
             K.euler_rates_to_omega(self.xang[b], self.xdang[b], self.xomg[b])
         if st == K.OK:
-            self.xtens[...] = self._tr[11]
+            self.xtens[...] = self._tr.tens
         else:
             self._loads_at_state()
         self._sync()

@@ -19,6 +19,7 @@ from .layout import BP_AFT_TOW_POINT, BP_CB
 from numba import njit
 
 from . import kernels as K
+from .model import ExplicitWork
 from .simulator import Simulator
 
 EULER, RK2, RK4 = 0, 1, 2
@@ -29,13 +30,17 @@ SCHEMES = {"euler": EULER, "rk2": RK2, "rk4": RK4}
 def _rates(r, v, ang, omg, top_r, top_v, topo, segp, bodyp, env, c_axial, ws, out_a, out_dang, out_domg, tens):
     """Accelerations of the free nodes, Euler-angle rates and body angular accelerations at a state.
     Prescribed nodes take ``top_r/top_v`` (vessel) or follow their body (aft tow points)."""
-    (seg_lo, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, node_sgn, order, pos,
-     body_node, body_aft_node) = topo
-    l0, diam, mu, cn, ct, can, cat, ea = segp
-    bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca = bodyp
-    rho, g, cur_z, cur_v = env
-    (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, lam, tmp3, fb, mb, att, atr, arr, arrinv, hvec,
-     aeff, bX, by, react, cur_b, minv, bdiag, wbody) = ws
+    seg_lo, seg_up, seg_uplocal, node_kind = topo.seg_lo, topo.seg_up, topo.seg_uplocal, topo.node_kind
+    node_nseg, node_segs, node_sgn, order, pos = topo.node_nseg, topo.node_segs, topo.node_sgn, topo.order, topo.pos
+    body_node, body_aft_node = topo.body_node, topo.body_aft_node
+    l0, diam, mu, cn, ct, can, cat, ea = segp.l0, segp.diam, segp.mu, segp.cn, segp.ct, segp.can, segp.cat, segp.ea
+    bp, btab_n, btab, pb_mass, pb_vol = bodyp.bp, bodyp.btab_n, bodyp.btab, bodyp.pb_mass, bodyp.pb_vol
+    pb_cda, pb_ca = bodyp.pb_cda, bodyp.pb_ca
+    rho, g, cur_z, cur_v = env.rho, env.g, env.cur_z, env.cur_v
+    tang, stretched, drag, bmat, madd, mnode = ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd, ws.mnode
+    bnode, fnode, lam, tmp3, fb, mb, att, atr = ws.bnode, ws.fnode, ws.lam, ws.tmp3, ws.fb, ws.mb, ws.att, ws.atr
+    arr, arrinv, hvec, aeff, bX, by, react = ws.arr, ws.arrinv, ws.hvec, ws.aeff, ws.bX, ws.by, ws.react
+    cur_b, minv, bdiag, wbody = ws.cur_b, ws.minv, ws.bdiag, ws.wbody
     nn = node_kind.shape[0]
     ns = l0.shape[0]
     nb = body_node.shape[0]
@@ -217,24 +222,24 @@ def explicit_advance(n_steps, dt, scheme, top_path, top_prev, top_node, topo, se
             v[top_node, i] = top_v[i]
             prev[i] = top_path[k, i]
         # aft tow points are carried by their bodies, not integrated
-        lam = ws[8]
+        lam = ws.lam
         for b in range(nb):
-            c = topo[10][b]
+            c = topo.body_aft_node[b]
             if c < 0:
                 continue
             K.rotation_matrix(ang[b, 0], ang[b, 1], ang[b, 2], lam)
-            a = topo[9][b]
-            _cross_add(omg[b], bodyp[0][b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3], lam, v[a], r[a], r[c], v[c])
+            a = topo.body_node[b]
+            _cross_add(omg[b], bodyp.bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3], lam, v[a], r[a], r[c], v[c])
         # failure detection
         for a in range(nn):
             for i in range(3):
                 if not math.isfinite(r[a, i]) or not math.isfinite(v[a, i]):
                     _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0)
                     return K.FAIL_NAN, k, a
-        ea = segp[7]
-        l0 = segp[0]
-        seg_lo = topo[0]
-        seg_up = topo[1]
+        ea = segp.ea
+        l0 = segp.l0
+        seg_lo = topo.seg_lo
+        seg_up = topo.seg_up
         for s in range(l0.shape[0]):
             dx = r[seg_up[s], 0] - r[seg_lo[s], 0]
             dy = r[seg_up[s], 1] - r[seg_lo[s], 1]
@@ -294,9 +299,7 @@ class ExplicitSimulator(Simulator):
         self.xtens = self.tens_hist[0].copy()
         nn, ns, nb = s.n_nodes, s.n_segments, s.n_rigid
         z = np.zeros
-        self._xws = (z((ns, 3)), z(ns), z((ns, 2, 3)), z((ns, 2, 3, 3)), z((ns, 3, 3)), z((nn, 3, 3)), z((nn, 3, 3)),
-                     z((nn, 3)), z((3, 3)), z(3), z(3), z(3), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z(3),
-                     z((3, 3)), z((max(nb, 1), 3, 3)), z((max(nb, 1), 3)), z(3), z(3), z((3, 3)), z(1), z(3))
+        self._xws = ExplicitWork.allocate(nn, ns, nb)
         self._k = [(z((nn, 3)), z((nn, 3)), z((nb, 3)), z((nb, 3))) for _ in range(4)]
         self._x_initial = (self.xr.copy(), self.xv.copy(), self.xang.copy(), self.xomg.copy(), self.xtens.copy())
 

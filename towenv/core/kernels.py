@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 from .layout import S_ANGLE_TOLERANCE, S_AS_PUBLISHED, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH, S_RELATIVE_TOLERANCE, S_TOLERANCE
+from .layout import N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS, N_STEP_CUTS
 from .layout import BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG, BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_REDUCED_DOF, BP_ROT_DAMPING, BP_TAIL_MASS, BP_VOLUME
 from numba import njit as _njit
 
@@ -1047,11 +1048,13 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
     solution lives in the work arrays), so the caller can retry with a smaller step.
     """
-    (seg_lo, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, node_sgn, order, pos,
-     body_node, body_aft_node) = topo
-    l0, diam, mu, cn, ct, can, cat, ea = segp
-    bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca = bodyp
-    rho, g, cur_z, cur_v = env
+    seg_lo, seg_up, seg_uplocal, node_kind = topo.seg_lo, topo.seg_up, topo.seg_uplocal, topo.node_kind
+    node_nseg, node_segs, node_sgn, order, pos = topo.node_nseg, topo.node_segs, topo.node_sgn, topo.order, topo.pos
+    body_node, body_aft_node = topo.body_node, topo.body_aft_node
+    l0, diam, mu, cn, ct, can, cat, ea = segp.l0, segp.diam, segp.mu, segp.cn, segp.ct, segp.can, segp.cat, segp.ea
+    bp, btab_n, btab, pb_mass, pb_vol = bodyp.bp, bodyp.btab_n, bodyp.btab, bodyp.pb_mass, bodyp.pb_vol
+    pb_cda, pb_ca = bodyp.pb_cda, bodyp.pb_ca
+    rho, g, cur_z, cur_v = env.rho, env.g, env.cur_z, env.cur_v
     tol_abs = settings[S_TOLERANCE]
     tol_rel = settings[S_RELATIVE_TOLERANCE]
     maxit = int(settings[S_MAX_ITERATIONS])
@@ -1063,10 +1066,14 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     stop_estimate = settings.shape[0] > S_NEWTON_ESTIMATE and settings[S_NEWTON_ESTIMATE] != 0.0
     prev_d = 0.0
     prev_a = 0.0
-    hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
-    (tang, stretched, drag, bmat, madd, mnode, bnode, fnode, acon, qvec, rs, vs, kd, kb, rhs, dT,
-     gres, tens, bX, by, blam, angs, dang, omg, hvec, tmp3, tmp33, tmp33b, att, atr, arr, arrinv, cur_b,
-     fb, mb, bdiag, react, bkc, bdmat, scr, flow) = ws
+    hist_r, hist_ang, tens_hist, top_react = state.hist_r, state.hist_ang, state.tens_hist, state.top_react
+    cstate, chart = state.cstate, state.chart
+    tang, stretched, drag, bmat, madd, mnode = ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd, ws.mnode
+    bnode, fnode, acon, qvec, rs, vs, kd, kb = ws.bnode, ws.fnode, ws.acon, ws.qvec, ws.rs, ws.vs, ws.kd, ws.kb
+    rhs, dT, gres, tens, bX, by, blam, angs = ws.rhs, ws.dT, ws.gres, ws.tens, ws.bX, ws.by, ws.blam, ws.angs
+    dang, omg, hvec, tmp3, tmp33, tmp33b, att = ws.dang, ws.omg, ws.hvec, ws.tmp3, ws.tmp33, ws.tmp33b, ws.att
+    atr, arr, arrinv, cur_b, fb, mb, bdiag = ws.atr, ws.arr, ws.arrinv, ws.cur_b, ws.fb, ws.mb, ws.bdiag
+    react, bkc, bdmat, scr, flow = ws.react, ws.bkc, ws.bdmat, ws.scr, ws.flow
 
     nn = node_kind.shape[0]
     ns = l0.shape[0]
@@ -1433,10 +1440,10 @@ def wave_orbital_velocity(x, y, z, t, amp, omega, kx, ky, k, phase, out):
 @njit(cache=True)
 def _wave_flow(t, r_t, r_tm1, r_tm2, wave, flow):
     """Orbital velocity at every node's predicted position for the step ending at t (frozen during the
-    step's Newton iteration). ``wave = (amp, omega, kx, ky, k, phase, opts)`` with
-    ``opts = [enabled, z_cut]``: nodes below ``z_cut`` (where every component has decayed below
+    step's Newton iteration). ``wave`` is a :class:`towenv.core.model.WaveField`; ``wave.options =
+    [enabled, z_cut]``: nodes below ``z_cut`` (where every component has decayed below
     1e-6 m/s) are skipped."""
-    amp, omega, kx, ky, k, phase, opts = wave
+    amp, omega, kx, ky, k, phase, opts = wave.amplitude, wave.omega, wave.kx, wave.ky, wave.k, wave.phase, wave.options
     nn = flow.shape[0]
     v = np.empty(3)
     for a in range(nn):
@@ -1461,7 +1468,7 @@ def _wave_flow(t, r_t, r_tm1, r_tm2, wave, flow):
 def _step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """houbolt_step with the end-stop active set: start from the contact state of the last step and redo
     the step (at most twice) when the converged solution contradicts it."""
-    cstate = state[4]
+    cstate = state.cstate
     comp[C_TRIAL] = cstate[CS_CONTACT]
     its = 0
     for attempt in range(3):
@@ -1522,9 +1529,10 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     ``NEED_REMESH`` after that step so the caller can insert or remove a node.
     Returns (status, step index (failed, or last done for NEED_REMESH), element, max|δT|).
     """
-    hist_r, hist_ang, tens_hist, top_react, cstate, chart = state
-    s_hist_r, s_hist_ang, s_tens, s_cstate = saved
-    l0 = segp[0]
+    hist_r, hist_ang, tens_hist, top_react = state.hist_r, state.hist_ang, state.tens_hist, state.top_react
+    cstate, chart = state.cstate, state.chart
+    s_hist_r, s_hist_ang, s_tens, s_cstate = saved.hist_r, saved.hist_ang, saved.tens_hist, saved.cstate
+    l0 = segp.l0
     max_cuts = int(settings[S_MAX_STEP_CUTS])
     nn = hist_r.shape[1]
     nb = hist_ang.shape[1]
@@ -1537,7 +1545,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     rc_pitch = settings[S_RECHART_PITCH] if settings.shape[0] > S_RECHART_PITCH else RECHART_PITCH
     wmode = int(winch[W_MODE])
     wseg = int(winch[W_SEG])
-    flow = ws[40]
+    flow = ws.flow
     for k in range(n_steps):
         # moving attitude chart: a body whose local pitch has passed RECHART_PITCH restarts from a chart
         # centred on its current attitude (between steps, so a failed step's retries stay in one chart)
@@ -1545,7 +1553,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             if abs(hist_ang[0, b, 1]) > rc_pitch:
                 rechart_body(b, hist_ang, chart, rc_lam, rc_lam0, rc_new, rc_tmp)
                 if counters.shape[0] > 4:
-                    counters[4] += 1
+                    counters[N_RECHARTS] += 1
         _wave_flow(t0 + (k + 1) * dt, hist_r[0], hist_r[1], hist_r[2], wave, flow)
         dl = 0.0
         l_old = 0.0
@@ -1556,10 +1564,10 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             l_old = l0[wseg]
             l0[wseg] = l_old + dl
         st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
-        counters[0] += 1
-        counters[1] += it
-        if it > counters[2]:
-            counters[2] = it
+        counters[N_STEPS] += 1
+        counters[N_ITERATIONS] += it
+        if it > counters[N_MAX_ITERATIONS]:
+            counters[N_MAX_ITERATIONS] = it
         if st != OK:
             s_hist_r[:] = hist_r
             s_hist_ang[:] = hist_ang
@@ -1569,7 +1577,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             for cut in range(1, max_cuts + 1):
                 nsub = 2 ** cut
                 h = dt / nsub
-                counters[3] += 1
+                counters[N_STEP_CUTS] += 1
                 for lv in range(3):
                     tau = -lv / nsub
                     for a in range(nn):
@@ -1590,7 +1598,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                     if wmode > 0:
                         l0[wseg] = l_old + tau * dl
                     st, it, el, md = _step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
-                    counters[1] += it
+                    counters[N_ITERATIONS] += it
                     if st != OK:
                         good = False
                         break

@@ -38,4 +38,15 @@ S_PLANAR = 8                # 1: vertical-plane model (optional)
 S_NEWTON_ESTIMATE = 9       # 1: newton_stop = "estimate" (optional)
 SETTINGS_SIZE = 10
 
-__all__ = [n for n in dir() if n.startswith(("BP_", "S_"))] + ["BODY_PARAM", "SETTINGS_SIZE"]
+
+# ------------------------------------------------------------------------------------------------------
+# step counters (int64, Simulator.counters / KernelData.counters): what Simulator.stats reports
+# ------------------------------------------------------------------------------------------------------
+N_STEPS = 0                 # steps taken (sub-steps of cut steps included)
+N_ITERATIONS = 1            # Newton iterations, summed
+N_MAX_ITERATIONS = 2        # most iterations of one step
+N_STEP_CUTS = 3             # step halvings
+N_RECHARTS = 4              # body attitude re-charts
+COUNTERS_SIZE = 5
+
+__all__ = [n for n in dir() if n.startswith(("BP_", "S_", "N_"))] + ["BODY_PARAM", "SETTINGS_SIZE", "COUNTERS_SIZE"]

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .layout import N_ITERATIONS, N_STEPS
+
 from . import kernels as K
 from .simulator import Simulator
 from .statics import quasi_static
@@ -40,6 +42,6 @@ class QuasiStaticSimulator(Simulator):
             self.hist_ang[0] = ang
             self.tens_hist[1] = self.tens_hist[0]
             self.tens_hist[0] = T
-            self.counters[0] += 1
-            self.counters[1] += 1
+            self.counters[N_STEPS] += 1
+            self.counters[N_ITERATIONS] += 1
             self._static_reaction(u)

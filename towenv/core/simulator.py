@@ -14,7 +14,8 @@ from ..errors import SimulationDivergence
 from . import kernels as K
 from .excitation import TowPointPath
 from .statics import quasi_static
-from .system import MAX_SEGS_PER_NODE, System, build_system
+from .model import HouboltWork, SavedStep, TimeLevels, WaveField
+from .system import System, build_system
 
 _CAUSES = {
     K.FAIL_NEWTON: "Newton iteration on the segment tensions did not converge (after step cuts)",
@@ -237,7 +238,7 @@ class Simulator:
             if pos[1] != y0:
                 refuse("lines (anchor)", f"an anchor off the plane y = {y0!r} m (got y = {pos[1]!r} m)")
 
-    _NO_WAVE = (np.zeros(1), np.ones(1), np.zeros(1), np.zeros(1), np.ones(1), np.zeros(1), np.zeros(2))
+    _NO_WAVE = WaveField.off()
 
     def _wave_arrays(self):
         """Wave components for the orbital-velocity option ([sea] orbital_velocities = true)."""
@@ -251,8 +252,8 @@ class Simulator:
             ky = w.k * np.sin(w.direction + off)
             vmax = float(np.sum(w.amplitude * w.omega))
             z_cut = np.log(1e-6 / vmax) / float(np.min(w.k)) if vmax > 1e-6 else 0.0
-            self._wave_cache = (w, (w.amplitude.copy(), w.omega.copy(), kx, ky, w.k.copy(), w.phase.copy(),
-                                    np.array([1.0, z_cut])))
+            self._wave_cache = (w, WaveField(w.amplitude.copy(), w.omega.copy(), kx, ky, w.k.copy(), w.phase.copy(),
+                                             np.array([1.0, z_cut])))
         return self._wave_cache[1]
 
     def set_sea(self, sea=None, seed: int = 0, n_components: int | None = None):
@@ -322,25 +323,17 @@ class Simulator:
     def _allocate(self):
         s = self.system
         nn, ns, nb = s.n_nodes, s.n_segments, s.n_rigid
-        mk = MAX_SEGS_PER_NODE
         self.hist_r = np.zeros((3, nn, 3))
         self.hist_ang = np.zeros((3, nb, 3))
         self.body_chart = np.tile(np.eye(3), (nb, 1, 1))
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
-        self._state = (self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate, self.body_chart)
-        self._ws = (np.zeros((ns, 3)), np.zeros(ns), np.zeros((ns, 2, 3)), np.zeros((ns, 2, 3, 3)), np.zeros((ns, 3, 3)),
-                    np.zeros((nn, 3, 3)), np.zeros((nn, 3, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)),
-                    np.zeros((nn, mk, 3)), np.zeros((nn, 3)), np.zeros((nn, 3)), np.zeros(ns), np.zeros((nn, mk, mk)),
-                    np.zeros(ns), np.zeros(ns), np.zeros(ns), np.zeros(ns),
-                    np.zeros((nb, 3, 3)), np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nb, 3)),
-                    np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros(3), np.zeros(3), np.zeros((3, 3)),
-                    np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3)),
-                    np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(1), np.zeros(3), np.zeros((max(nb, 1), 9)),
-                    np.zeros((max(nb, 1), 3, 3)), np.zeros((6, 3)), np.zeros((nn, 3)))
-        self._saved = (np.zeros((3, nn, 3)), np.zeros((3, nb, 3)), np.zeros((2, ns)), np.zeros(8))
+        self._state = TimeLevels(self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate,
+                                 self.body_chart)
+        self._ws = HouboltWork.allocate(nn, ns, nb)
+        self._saved = SavedStep.allocate(nn, ns, nb)
         if not hasattr(self, "counters"):
-            self.counters = np.zeros(5, np.int64)    # steps, iterations, max iterations, step cuts, re-charts
+            self.counters = np.zeros(L.COUNTERS_SIZE, np.int64)    # layout: towenv.core.layout N_*
         self._args = (s.top_node, s.topo(), s.segp(), s.bodyp(), s.env())
 
     _COMP_MODES = {"passive": K.COMP_PASSIVE, "locked": K.COMP_LOCKED, "position": K.COMP_POSITION,
@@ -421,7 +414,8 @@ class Simulator:
         ws = self._ws
         r = self.hist_r[0]
         v = np.tile(U, (s.n_nodes, 1))
-        tang, stretched, drag, bmat, madd, mnode, bnode, fnode = ws[:8]
+        tang, stretched, drag, bmat, madd, mnode, bnode, fnode = (ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd,
+                                                                  ws.mnode, ws.bnode, ws.fnode)
         K.segment_loads(r, v, s.seg_lo, s.seg_up, s.l0, s.diam, s.mu, s.cn, s.ct, s.can, s.cat, s.rho, s.g,
                         s.cur_z, s.cur_v, tang, stretched, drag, bmat, madd)
         K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g, drag, bmat,
@@ -763,7 +757,8 @@ class Simulator:
         r = self.positions
         v = self.velocities
         ws = self._ws
-        tang, stretched, drag, bmat, madd, mnode, bnode, fnode = ws[:8]
+        tang, stretched, drag, bmat, madd, mnode, bnode, fnode = (ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd,
+                                                                  ws.mnode, ws.bnode, ws.fnode)
         K.segment_loads(r, v, s.seg_lo, s.seg_up, s.l0, s.diam, s.mu, s.cn, s.ct, s.can, s.cat, s.rho, s.g,
                         s.cur_z, s.cur_v, tang, stretched, drag, bmat, madd)
         K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g,
@@ -850,9 +845,9 @@ class Simulator:
     @property
     def stats(self):
         c = self.counters
-        return {"steps": int(c[0]), "iterations": int(c[1]), "max_iterations": int(c[2]), "step_cuts": int(c[3]),
-                "recharts": int(c[4]),
-                "mean_iterations": float(c[1] / max(c[0], 1))}
+        return {"steps": int(c[L.N_STEPS]), "iterations": int(c[L.N_ITERATIONS]),
+                "max_iterations": int(c[L.N_MAX_ITERATIONS]), "step_cuts": int(c[L.N_STEP_CUTS]),
+                "recharts": int(c[L.N_RECHARTS]), "mean_iterations": float(c[L.N_ITERATIONS] / max(c[L.N_STEPS], 1))}
 
 
 def quaternion_from_rotation(R) -> np.ndarray:

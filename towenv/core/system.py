@@ -16,7 +16,7 @@ from .layout import (BODY_PARAM, BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POI
 
 from .kernels import COMPENSATOR, FREE, PRESCRIBED_AFT, PRESCRIBED_FIXED, PRESCRIBED_TOP
 
-MAX_SEGS_PER_NODE = 8
+from .model import MAX_SEGS_PER_NODE, Bodies, Segments, Topology, Water
 MAX_TABLE = 64
 
 
@@ -100,18 +100,18 @@ class System:
     def n_rigid(self) -> int:
         return int(self.body_node.shape[0])
 
-    def topo(self):
-        return (self.seg_lo, self.seg_up, self.seg_uplocal, self.node_kind, self.node_nseg, self.node_segs,
+    def topo(self) -> Topology:
+        return Topology(self.seg_lo, self.seg_up, self.seg_uplocal, self.node_kind, self.node_nseg, self.node_segs,
                 self.node_sgn, self.order, self.pos, self.body_node, self.body_aft_node)
 
-    def segp(self):
-        return (self.l0, self.diam, self.mu, self.cn, self.ct, self.can, self.cat, self.ea)
+    def segp(self) -> Segments:
+        return Segments(self.l0, self.diam, self.mu, self.cn, self.ct, self.can, self.cat, self.ea)
 
-    def bodyp(self):
-        return (self.bp, self.btab_n, self.btab, self.pb_mass, self.pb_vol, self.pb_cda, self.pb_ca)
+    def bodyp(self) -> Bodies:
+        return Bodies(self.bp, self.btab_n, self.btab, self.pb_mass, self.pb_vol, self.pb_cda, self.pb_ca)
 
-    def env(self):
-        return (float(self.rho), float(self.g), self.cur_z, self.cur_v)
+    def env(self) -> Water:
+        return Water(float(self.rho), float(self.g), self.cur_z, self.cur_v)
 
     def line(self, name: str) -> LineMap:
         for lm in self.lines:

@@ -15,6 +15,7 @@ is physics: the simulator core (``towenv.core``) does not know the row.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -50,6 +51,23 @@ COL = {n: i for i, n in enumerate(MEAS_COLUMNS)}
 NREF = 15
 
 
+class Gathered(NamedTuple):
+    """What :func:`measure_copy` reads of one Simulator (by reference)."""
+    hist_r: np.ndarray
+    hist_ang: np.ndarray
+    chart: np.ndarray
+    tens_hist: np.ndarray
+    top_react: np.ndarray
+    cstate: np.ndarray
+    comp: np.ndarray            # compensator parameters (the environments write their commands here)
+    winch: np.ndarray           # winch parameters (same)
+    wstate: np.ndarray
+    l0: np.ndarray
+    idx: np.ndarray             # int64: tow-point node, body node, rigid index, sheave node, cable top node, node below
+    wsegs: np.ndarray           # int64: the winch line's segments
+    inv_seg: np.ndarray         # 1 / breaking load per segment
+
+
 def gather_arrays(sim, body, inv_seg):
     """Arrays :func:`measure_copy` reads, from the Simulator's public state attributes (independent of the
     kernel tuples' layout): ``body`` is the towed body measured, ``inv_seg`` 1/breaking load per segment."""
@@ -66,7 +84,7 @@ def gather_arrays(sim, body, inv_seg):
             below = int(ln.nodes[1])
             break
     idx = np.array([int(s.top_node), int(bm.node), int(bm.rigid_index), comp_node, ctop, below], np.int64)
-    return (sim.hist_r, sim.hist_ang, sim.body_chart, sim.tens_hist, sim.top_react, sim.cstate, sim.comp, sim.winch,
+    return Gathered(sim.hist_r, sim.hist_ang, sim.body_chart, sim.tens_hist, sim.top_react, sim.cstate, sim.comp, sim.winch,
             sim.wstate, s.l0, idx, wsegs, np.ascontiguousarray(inv_seg, dtype=np.float64))
 
 
@@ -95,7 +113,8 @@ def _mru(blk, mblk, o, dt, out):
 def measure_copy(g, ref, dt, t, out, w3a, w3b, w3c, blk, mblk, o, n):
     """Fill measurement row ``out`` of one copy after ``n`` physics steps; the last step is row ``o`` of the
     copy's tow-point buffers ``blk`` (positions) / ``mblk`` (mean track x, y, z, heading)."""
-    hist_r, hist_ang, chart, tens_hist, top_react, cstate, comp, winch, wstate, l0, idx, wsegs, inv_seg = g
+    hist_r, hist_ang, chart, tens_hist, top_react, cstate = g.hist_r, g.hist_ang, g.chart, g.tens_hist, g.top_react, g.cstate
+    comp, winch, wstate, l0, idx, wsegs, inv_seg = g.comp, g.winch, g.wstate, g.l0, g.idx, g.wsegs, g.inv_seg
     top = idx[0]
     node = idx[1]
     ri = idx[2]

@@ -65,8 +65,8 @@ def _signature(kd, sim):
 
 @njit(cache=True)
 def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count, out, res):
-    comp = g[6]
-    winch = g[7]
+    comp = g.comp
+    winch = g.winch
     if kind == ACT_COMP_GAINS:
         comp[K.C_K] = u0
         comp[K.C_B] = u1
