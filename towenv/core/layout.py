@@ -1,9 +1,12 @@
-"""Column layout of the rigid-body parameter rows ``System.bp`` (one row per rigid body, float64): the only
-place the column numbers are written. Kernels and builders index with these names (numba treats them as
-compile-time constants, so the compiled code is the same as with bare numbers); a 3-vector starts at its
-name (``bp[b, BP_CG:BP_CG + 3]``, ``bp[b, BP_CG + 1]`` is its y component).
+"""Layouts and codes the kernels share. First the column layout of the rigid-body parameter rows
+``System.bp`` (one row per rigid body, float64): the only place the column numbers are written. Kernels
+and builders index with these names (numba treats them as compile-time constants, so the compiled code is
+the same as with bare numbers); a 3-vector starts at its name (``bp[b, BP_CG:BP_CG + 3]``, ``bp[b, BP_CG + 1]`` is its y component).
 
-Body axes, tow point at the origin (docs/model-notes.md)."""
+Body axes, tow point at the origin (docs/model-notes.md). Below: the solver-settings array, the step
+counters, node kinds, status codes and the compensator/winch parameter and state arrays."""
+import math
+
 
 BP_MASS = 0                 # kg
 BP_VOLUME = 1               # m^3 (buoyancy)
@@ -49,4 +52,43 @@ N_STEP_CUTS = 3             # step halvings
 N_RECHARTS = 4              # body attitude re-charts
 COUNTERS_SIZE = 5
 
-__all__ = [n for n in dir() if n.startswith(("BP_", "S_", "N_"))] + ["BODY_PARAM", "SETTINGS_SIZE", "COUNTERS_SIZE"]
+
+# ------------------------------------------------------------------------------------------------------
+# node kinds, status codes of the step kernels, actuator parameter/state layouts
+# ------------------------------------------------------------------------------------------------------
+# status codes returned by the step kernels
+OK = 0
+FAIL_NEWTON = 1        # iteration cap reached / residual growing
+FAIL_NAN = 2           # non-finite number appeared
+FAIL_STRETCH = 3       # non-physical strain in a segment
+FAIL_ANGLE = 4         # body pitch reached ±85° inside its attitude chart (guard: re-charting keeps it far below)
+
+FREE = 0
+PRESCRIBED_TOP = 1
+PRESCRIBED_AFT = 2
+PRESCRIBED_FIXED = 3   # anchor: fixed in space
+COMPENSATOR = 4        # cable top node on a heave-compensator sheave: moves with the ship except along z
+NEED_REMESH = 10       # advance(): not a failure — the winch line needs a node inserted/removed
+RETRY_CONTACT = 11     # houbolt_step(): the sheave's end-stop contact state changed; redo the step
+
+# moving attitude chart (see ``body_rotation``): a body whose local pitch exceeds this at the start of a
+# step is re-charted (its local Euler angles restart from zero). Default of ``settings[S_RECHART_PITCH]``
+# (``SolverSettings.rechart_pitch``) when the settings array is shorter.
+RECHART_PITCH = math.pi / 6.0
+# pitch (rad, ~85°) inside a body's attitude chart at which a step fails (FAIL_ANGLE): the Euler-angle
+# singularity guard of every scheme
+PITCH_LIMIT = 1.48
+
+# heave compensator parameter layout (float64[16])
+C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_TRIAL, C_UNUSED, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
+# compensator state layout (float64[8]): hits, in-contact flag, max penetration, actuator state
+CS_HITS, CS_CONTACT, CS_PEN, CS_ACT = range(4)
+COMP_PASSIVE, COMP_LOCKED, COMP_POSITION, COMP_FORCE = 1, 2, 3, 4
+# winch parameter layout (float64[12]) and state (float64[4])
+W_MODE, W_VCMD, W_VMAX, W_AMAX, W_LMIN, W_LMAX, W_TSET, W_GAIN, W_DEADBAND, W_SEG, W_LNOM = range(11)
+WS_V, WS_LEN, WS_PAID = range(3)
+WINCH_SPEED, WINCH_TENSION = 1, 2
+# array sizes (the layouts above name fewer slots; the rest is spare)
+COMP_SIZE, COMP_STATE_SIZE, WINCH_SIZE, WINCH_STATE_SIZE = 16, 8, 12, 4
+
+__all__ = [n for n in dir() if n.isupper()]

@@ -91,7 +91,7 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
 
 
 def kernels_compiled() -> bool:
-    """Whether numba's on-disk cache already holds the compiled time-step kernel (``kernels.advance``) for
+    """Whether numba's on-disk cache already holds the compiled time-step kernel (``houbolt.advance``) for
     this Python; False on the first run after an install or an update, when compiling takes about a minute
     (numba caches next to the sources, or under ``NUMBA_CACHE_DIR``)."""
     import sys
@@ -100,7 +100,7 @@ def kernels_compiled() -> bool:
     dirs = [Path(kernels.__file__).resolve().parent / "__pycache__"]
     if os.environ.get("NUMBA_CACHE_DIR"):
         dirs.append(Path(os.environ["NUMBA_CACHE_DIR"]))
-    return any(any(d.rglob(f"kernels.advance-*.{tag}.nbi")) for d in dirs if d.is_dir())
+    return any(any(d.rglob(f"houbolt.advance-*.{tag}.nbi")) for d in dirs if d.is_dir())
 
 
 def _finite_positive(name, value) -> float:

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core import kernels as K
-from ..core.kernels import njit
+from ..core.jit import njit
 
 __all__ = ["MEAS_COLUMNS", "COL", "NREF", "gather_arrays", "measure_copy"]
 

@@ -42,7 +42,7 @@ from numba import prange
 from numba.typed import List as _TypedList
 
 from ..core import kernels as K
-from ..core.kernels import njit
+from ..core.jit import njit
 from .measurements import MEAS_COLUMNS, NREF, R_HALF_STROKE, R_MAXSTEPS, R_STEPS, R_TREF, R_VMAX, gather_arrays, \
     measure_copy
 

@@ -27,7 +27,8 @@ import math
 import numpy as np
 from ..core.layout import BP_CB
 
-from ..core.kernels import body_loads, current_at, njit, rotation_matrix
+from ..core.jit import njit
+from ..core.kernels import body_loads, current_at, rotation_matrix
 
 
 @njit(cache=True)

@@ -1,0 +1,537 @@
+"""The Houbolt time step with the Newton iteration on segment tensions (model.md §§ 3–5), and ``advance``:
+many steps with the tow point's path, step halving on failure, the winch and the attitude re-charting.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .jit import njit
+from .layout import (BP_CB, BP_REDUCED_DOF, BP_TAIL_MASS, COMPENSATOR, COMP_FORCE, COMP_PASSIVE, COMP_POSITION,
+                     CS_ACT, CS_CONTACT, CS_HITS, CS_PEN, C_CMD, C_MODE, C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN,
+                     C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON, FAIL_STRETCH, FREE, NEED_REMESH,
+                     N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS, N_STEP_CUTS, OK, PITCH_LIMIT,
+                     RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED, S_MAX_ITERATIONS,
+                     S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH,
+                     S_RELATIVE_TOLERANCE, S_TOLERANCE, WS_LEN, WS_PAID, WS_V, W_LNOM, W_MODE, W_SEG)
+from .actuators import _compensator_node, _end_stop_force, _winch_speed
+from .body_dynamics import (_condense, _rotational_stiffness, _translational_damping, aft_rotational_stiffness,
+                            aft_segment_stiffness, body_loads, place_aft_nodes)
+from .cable_loads import current_at, node_assembly, node_reaction, segment_loads
+from .orbital_flow import _wave_flow
+from .rotations import (_chart_rotation, _inv3, body_rotation, euler_rates_to_omega, omega_dot_to_euler_acc,
+                        rechart_body)
+from .tension_solve import (_positions_from_tensions, assemble_tension_system, thesis_recursion_solve,
+                            tree_ldlt_solve)
+
+
+@njit(cache=True)
+def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
+    """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
+
+    On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
+    solution lives in the work arrays), so the caller can retry with a smaller step.
+    """
+    seg_lo, seg_up, seg_uplocal, node_kind = topo.seg_lo, topo.seg_up, topo.seg_uplocal, topo.node_kind
+    node_nseg, node_segs, node_sgn, order, pos = topo.node_nseg, topo.node_segs, topo.node_sgn, topo.order, topo.pos
+    body_node, body_aft_node = topo.body_node, topo.body_aft_node
+    l0, diam, mu, cn, ct, can, cat, ea = segp.l0, segp.diam, segp.mu, segp.cn, segp.ct, segp.can, segp.cat, segp.ea
+    bp, btab_n, btab, pb_mass, pb_vol = bodyp.bp, bodyp.btab_n, bodyp.btab, bodyp.pb_mass, bodyp.pb_vol
+    pb_cda, pb_ca = bodyp.pb_cda, bodyp.pb_ca
+    rho, g, cur_z, cur_v = env.rho, env.g, env.cur_z, env.cur_v
+    tol_abs = settings[S_TOLERANCE]
+    tol_rel = settings[S_RELATIVE_TOLERANCE]
+    maxit = int(settings[S_MAX_ITERATIONS])
+    max_strain = settings[S_MAX_STRAIN]
+    ang_tol = settings[S_ANGLE_TOLERANCE]
+    # 2-D vertical-plane model (solver.planar): lateral node DOF and body roll/yaw frozen
+    planar = settings.shape[0] > S_PLANAR and settings[S_PLANAR] != 0.0
+    # Newton stopping on the estimated remaining error (solver.newton_stop = "estimate")
+    stop_estimate = settings.shape[0] > S_NEWTON_ESTIMATE and settings[S_NEWTON_ESTIMATE] != 0.0
+    prev_d = 0.0
+    prev_a = 0.0
+    hist_r, hist_ang, tens_hist, top_react = state.hist_r, state.hist_ang, state.tens_hist, state.top_react
+    cstate, chart = state.cstate, state.chart
+    tang, stretched, drag, bmat, madd, mnode = ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd, ws.mnode
+    bnode, fnode, acon, qvec, rs, vs, kd, kb = ws.bnode, ws.fnode, ws.acon, ws.qvec, ws.rs, ws.vs, ws.kd, ws.kb
+    rhs, dT, gres, tens, bX, by, blam, angs = ws.rhs, ws.dT, ws.gres, ws.tens, ws.bX, ws.by, ws.blam, ws.angs
+    dang, omg, hvec, tmp3, tmp33, tmp33b, att = ws.dang, ws.omg, ws.hvec, ws.tmp3, ws.tmp33, ws.tmp33b, ws.att
+    atr, arr, arrinv, cur_b, fb, mb, bdiag = ws.atr, ws.arr, ws.arrinv, ws.cur_b, ws.fb, ws.mb, ws.bdiag
+    react, bkc, bdmat, scr, flow = ws.react, ws.bkc, ws.bdmat, ws.scr, ws.flow
+
+    nn = node_kind.shape[0]
+    ns = l0.shape[0]
+    nb = body_node.shape[0]
+    r_t = hist_r[0]
+    r_tm1 = hist_r[1]
+    r_tm2 = hist_r[2]
+    c11 = 11.0 * dt / 12.0
+    hdt2 = 0.5 * dt * dt
+    i6dt = 1.0 / (6.0 * dt)
+    idt2 = 1.0 / (dt * dt)
+
+    cmode = int(comp[C_MODE])
+    cnode = int(comp[C_NODE])
+    act_new = cstate[CS_ACT]
+    if cmode == COMP_POSITION or cmode == COMP_FORCE:
+        # first-order actuator lag with a rate limit (explicit, once per step)
+        rate = (comp[C_CMD] - cstate[CS_ACT]) / max(comp[C_TAU], dt)
+        if rate > comp[C_RATE]:
+            rate = comp[C_RATE]
+        elif rate < -comp[C_RATE]:
+            rate = -comp[C_RATE]
+        act_new = cstate[CS_ACT] + dt * rate
+
+    # predictor
+    for a in range(nn):
+        for i in range(3):
+            rs[a, i] = 3.0 * r_t[a, i] - 3.0 * r_tm1[a, i] + r_tm2[a, i]
+    for i in range(3):
+        rs[top_node, i] = r_top_new[i]
+    for b in range(nb):
+        for i in range(3):
+            angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
+    place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
+    for s in range(ns):
+        tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
+        tens[s] = tp if tp > 0.0 else 0.0
+
+    # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
+    any_aft = False
+    for b in range(nb):
+        if body_aft_node[b] >= 0:
+            any_aft = True
+    status = FAIL_NEWTON
+    elem = -1
+    it = 0
+    maxd = 0.0
+    for it in range(1, maxit + 1):
+        # --- coefficients at the current iterate -------------------------------------------------
+        for a in range(nn):
+            for i in range(3):
+                # velocity relative to the wave orbital flow (zero unless [sea] orbital_velocities is on);
+                # the current is subtracted where each load is evaluated
+                vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt \
+                    - flow[a, i]
+        segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
+                      tang, stretched, drag, bmat, madd)
+        node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
+                      pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode)
+        for b in range(nb):
+            a = body_node[b]
+            for i in range(3):
+                dang[b, i] = (11.0 * angs[b, i] - 18.0 * hist_ang[0, b, i] + 9.0 * hist_ang[1, b, i]
+                              - 2.0 * hist_ang[2, b, i]) * i6dt
+            lam = blam[b]
+            _chart_rotation(angs[b, 0], angs[b, 1], angs[b, 2], chart, b, lam)
+            euler_rates_to_omega(angs[b], dang[b], omg[b])
+            w = omg[b]
+            for i in range(3):
+                tmp3[i] = lam[i, 0] * vs[a, 0] + lam[i, 1] * vs[a, 1] + lam[i, 2] * vs[a, 2]
+            zc = rs[a, 2] + lam[0, 2] * bp[b, BP_CB] + lam[1, 2] * bp[b, BP_CB + 1] + lam[2, 2] * bp[b, BP_CB + 2]
+            current_at(zc, cur_z, cur_v, cur_b)
+            body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
+            reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
+            if it == 1:
+                _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33,
+                                      reduced)
+                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
+            c = body_aft_node[b]
+            if c >= 0:
+                node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
+                              mnode, fnode, react)
+            if not _condense(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
+                             tmp33b, bX[b], by[b], mnode, fnode, reduced):
+                return FAIL_NAN, it, -1, 0.0
+            for i in range(3):
+                bkc[b, 6 + i] = arr[i, i]
+            # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
+            for i in range(3):
+                for j in range(3):
+                    sacc = 0.0
+                    for k in range(3):
+                        for m in range(3):
+                            sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
+                    bnode[a, i, j] += sacc
+        if it == 1 and any_aft:
+            # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
+            for b in range(nb):
+                c = body_aft_node[b]
+                if c >= 0:
+                    aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
+                                             stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc)
+        # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
+        for a in range(nn):
+            if node_kind[a] == COMPENSATOR:
+                _compensator_node(a, int(comp[C_SHIP]), comp, cmode, act_new, dt, rs, r_t, r_tm1, r_tm2, node_nseg,
+                                  node_segs, tang, stretched, tens, mnode, bnode, fnode, acon, qvec)
+                continue
+            if node_kind[a] != FREE:
+                continue
+            # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
+            # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
+            # both sides, so they change the convergence rate only, never the converged solution.
+            for i in range(3):
+                for j in range(3):
+                    kg = 0.0
+                    for k in range(node_nseg[a]):
+                        sk = node_segs[a, k]
+                        if stretched[sk] > 0.0:
+                            kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+                    att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
+                    tmp33[i, j] = mnode[a, i, j] + att[i, j]
+            # a body towing a tail from its aft tow point: the tail's pull is a load on the body inside the
+            # Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ +
+            # T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness)
+            for b in range(nb if any_aft else 0):
+                c = body_aft_node[b]
+                if body_node[b] != a or c < 0:
+                    continue
+                for k in range(node_nseg[c]):
+                    sk = node_segs[c, k]
+                    kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
+                    if kax == 0.0 and kgeo == 0.0:
+                        continue
+                    for i in range(3):
+                        for j in range(3):
+                            tt = tang[sk, i] * tang[sk, j]
+                            add = hdt2 * (kax * tt + kgeo * ((1.0 if i == j else 0.0) - tt))
+                            att[i, j] += add
+                            tmp33[i, j] += add
+            if not _inv3(tmp33, tmp33b):
+                return FAIL_NAN, it, a, 0.0
+            for j in range(3):
+                hvec[j] = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
+            for i in range(3):
+                hi = 0.0
+                for j in range(3):
+                    hi += mnode[a, i, j] * hvec[j] + att[i, j] * rs[a, j]
+                tmp3[i] = hi + hdt2 * fnode[a, i]
+            for i in range(3):
+                acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
+            for k in range(node_nseg[a]):
+                s = node_segs[a, k]
+                for i in range(3):
+                    qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
+                                            + tmp33b[i, 2] * tang[s, 2])
+
+        if planar:
+            # vertical-plane model: free nodes hold their lateral coordinate. The scenes it accepts have no
+            # x–y or y–z coupling in M̃ (no lateral tangent, velocity or body asymmetry), so the (x, z) rows
+            # of the 3-D solve are the plane's own solve (a separate 2×2 path measured slower)
+            for a in range(nn):
+                if node_kind[a] == FREE:
+                    acon[a, 1] = r_t[a, 1]
+                    for k in range(node_nseg[a]):
+                        qvec[a, k, 1] = 0.0
+        # positions at the current tensions, and residuals
+        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
+        place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
+        tmax = 0.0
+        for s in range(ns):
+            p = seg_lo[s]
+            q = seg_up[s]
+            dx = rs[q, 0] - rs[p, 0]
+            dy = rs[q, 1] - rs[p, 1]
+            dz = rs[q, 2] - rs[p, 2]
+            ell = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if math.isinf(ea[s]):
+                gres[s] = ell - l0[s]
+            else:
+                gres[s] = ell - l0[s] * (1.0 + tens[s] / ea[s])
+            if tens[s] > tmax:
+                tmax = tens[s]
+        # --- Newton update of the tensions ----------------------------------------------------
+        assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qvec, l0, ea, tens, kd, kb)
+        for s in range(ns):
+            rhs[s] = gres[s]
+            if tens[s] <= 0.0 and gres[s] < 0.0:
+                # slack segment: hold T = 0 (row and column replaced by identity)
+                kd[s] = 1.0
+                rhs[s] = -tens[s]
+                for e in range(2):
+                    a = seg_lo[s] if e == 0 else seg_up[s]
+                    for k in range(node_nseg[a]):
+                        if node_segs[a, k] == s:
+                            for k2 in range(node_nseg[a]):
+                                kb[a, k, k2] = 0.0
+                                kb[a, k2, k] = 0.0
+        if settings[S_AS_PUBLISHED] == 1.0:
+            if not thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, dT,
+                                          gres):
+                return FAIL_NEWTON, it, -1, 0.0
+        elif not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb,
+                                 rhs, dT):
+            return FAIL_NEWTON, it, -1, 0.0
+        maxd = 0.0
+        elem = -1
+        any_slack = False
+        for s in range(ns):
+            tn = tens[s] + dT[s]
+            if tn < 0.0:
+                tn = 0.0
+            if tn <= 0.0:
+                any_slack = True
+            d = abs(tn - tens[s])
+            if not (d <= maxd):     # also catches NaN
+                maxd = d
+                elem = s
+            tens[s] = tn
+        if not math.isfinite(maxd):
+            return FAIL_NAN, it, elem, maxd
+        # positions with the updated tensions (same coefficients)
+        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
+        # --- body rotations: ω̇ = A_rr⁻¹(M − A_rt a), Houbolt on the Euler angles -------------------
+        dang_max = 0.0
+        for b in range(nb):
+            a = body_node[b]
+            lam = blam[b]
+            for i in range(3):
+                tmp3[i] = (2.0 * rs[a, i] - 5.0 * r_t[a, i] + 4.0 * r_tm1[a, i] - r_tm2[a, i]) * idt2
+            for i in range(3):
+                hvec[i] = lam[i, 0] * tmp3[0] + lam[i, 1] * tmp3[1] + lam[i, 2] * tmp3[2]
+            for i in range(3):
+                tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
+            omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
+            reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
+            for i in range(3):
+                if reduced and i != 1:
+                    angs[b, i] = hist_ang[0, b, i]      # roll and yaw held
+                    continue
+                na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
+                # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
+                # of the fixed-point update that leaves the converged solution unchanged
+                na = angs[b, i] + (na - angs[b, i]) / (1.0 + (hdt2 * bkc[b, i] + c11 * bkc[b, 3 + i]) / bkc[b, 6 + i])
+                dd = abs(na - angs[b, i])
+                if not (dd <= dang_max):
+                    dang_max = dd
+                angs[b, i] = na
+            if abs(angs[b, 1]) > PITCH_LIMIT:     # ~85 deg in the chart: only if re-charting (advance) could not keep up
+                return FAIL_ANGLE, it, b, maxd
+        if not math.isfinite(dang_max):
+            return FAIL_NAN, it, -1, maxd
+        place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
+        tol_t = tol_abs + tol_rel * tmax
+        if maxd <= tol_t and dang_max <= ang_tol:
+            status = OK
+            break
+        if stop_estimate and it >= 2 and not any_slack:
+            # remaining error of a contracting iteration ≈ last change · ρ/(1 − ρ), ρ = ratio of the last two
+            # changes; trusted only while ρ ≤ 1/2 (then the estimate is at most the last change) and no
+            # segment is slack (the T ≥ 0 clamp makes the contraction non-smooth)
+            ok_t = maxd <= tol_t or (maxd <= 0.5 * prev_d and maxd * maxd / (prev_d - maxd) <= tol_t)
+            ok_a = dang_max <= ang_tol or (dang_max <= 0.5 * prev_a
+                                           and dang_max * dang_max / (prev_a - dang_max) <= ang_tol)
+            if ok_t and ok_a:
+                status = OK
+                break
+        prev_d = maxd
+        prev_a = dang_max
+    if status != OK:
+        return status, it, elem, maxd
+    # --- end-stop contact: exact (the sheave is held at the stop while the stop pushes) --------------
+    if cmode == COMP_PASSIVE or cmode == COMP_FORCE:
+        z_new = rs[cnode, 2] - rs[top_node, 2]
+        trial = comp[C_TRIAL]
+        if trial == 0.0:
+            if z_new > comp[C_SMAX]:
+                comp[C_TRIAL] = 1.0
+                return RETRY_CONTACT, it, cnode, maxd
+            if z_new < comp[C_SMIN]:
+                comp[C_TRIAL] = -1.0
+                return RETRY_CONTACT, it, cnode, maxd
+        else:
+            fs = _end_stop_force(cnode, top_node, comp, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, node_sgn,
+                                 tang, tens, mnode, fnode)
+            if trial * fs > 0.0:       # the stop would have to pull: release
+                comp[C_TRIAL] = 0.0
+                return RETRY_CONTACT, it, cnode, maxd
+    # --- checks and commit ------------------------------------------------------------------------
+    for s in range(ns):
+        if not math.isinf(ea[s]) and tens[s] / ea[s] > max_strain:
+            return FAIL_STRETCH, it, s, maxd
+    for a in range(nn):
+        for i in range(3):
+            if not math.isfinite(rs[a, i]):
+                return FAIL_NAN, it, a, maxd
+    # reaction at the cable's top (the vessel tow point, or the compensator sheave) at the converged
+    # state (coefficients of the last iterate)
+    rnode = cnode if cmode > 0 else top_node
+    node_reaction(rnode, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
+                  mnode, fnode, react)
+    if cmode > 0:
+        z = rs[cnode, 2] - rs[top_node, 2]
+        pen = z - comp[C_SMAX]
+        if comp[C_SMIN] - z > pen:
+            pen = comp[C_SMIN] - z
+        if pen > cstate[CS_PEN]:
+            cstate[CS_PEN] = pen
+        if comp[C_TRIAL] != 0.0 and cstate[CS_CONTACT] == 0.0:
+            cstate[CS_HITS] += 1.0
+        cstate[CS_CONTACT] = comp[C_TRIAL]
+        cstate[CS_ACT] = act_new
+    for i in range(3):
+        top_react[i] = react[i]
+    for a in range(nn):
+        for i in range(3):
+            hist_r[2, a, i] = hist_r[1, a, i]
+            hist_r[1, a, i] = hist_r[0, a, i]
+            hist_r[0, a, i] = rs[a, i]
+    for b in range(nb):
+        for i in range(3):
+            hist_ang[2, b, i] = hist_ang[1, b, i]
+            hist_ang[1, b, i] = hist_ang[0, b, i]
+            hist_ang[0, b, i] = angs[b, i]
+    for s in range(ns):
+        tens_hist[1, s] = tens_hist[0, s]
+        tens_hist[0, s] = tens[s]
+    return OK, it, -1, maxd
+
+
+@njit(cache=True)
+def _quad_interp(y1, y0, ym1, tau):
+    """Quadratic through (τ=1, y1), (0, y0), (−1, ym1) evaluated at τ (history re-spacing)."""
+    return ym1 * tau * (tau - 1.0) * 0.5 + y0 * (1.0 - tau * tau) + y1 * tau * (tau + 1.0) * 0.5
+
+
+@njit(cache=True)
+def _quad3(y0, ym1, ym2, tau):
+    """Quadratic through (0, y0), (−1, ym1), (−2, ym2) evaluated at τ ≤ 0 (in units of the old step)."""
+    return y0 * (tau + 1.0) * (tau + 2.0) * 0.5 - ym1 * tau * (tau + 2.0) + ym2 * tau * (tau + 1.0) * 0.5
+
+
+@njit(cache=True)
+def _step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
+    """houbolt_step with the end-stop active set: start from the contact state of the last step and redo
+    the step (at most twice) when the converged solution contradicts it."""
+    cstate = state.cstate
+    comp[C_TRIAL] = cstate[CS_CONTACT]
+    its = 0
+    for attempt in range(3):
+        st, it, el, md = houbolt_step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
+        its += it
+        if st != RETRY_CONTACT:
+            return st, its, el, md
+    return FAIL_NEWTON, its, el, md
+
+
+@njit(cache=True)
+def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, state, ws, saved, counters,
+            comp, winch, wstate, t0, wave):
+    """Advance ``n_steps`` steps of size ``dt``; ``top_path[k]`` is the vessel tow point at the end of step k.
+
+    ``state = (hist_r, hist_ang, tens_hist, top_react, cstate, chart)``: ``hist_ang`` holds each rigid body's
+    Euler angles at the last three time levels *relative to its chart* ``chart[b]`` (see ``body_rotation``);
+    before each step a body whose pitch in its chart exceeds ``settings[7]`` (default ``RECHART_PITCH``) is
+    re-charted (``rechart_body``), so the attitude has no singularity. ``settings[8]`` ≠ 0 selects the
+    vertical-plane model. A step whose Newton iteration fails is retried as 2, 4, … 2^max_cuts sub-steps
+    with the Houbolt history re-interpolated quadratically at the new spacing (model.md 5.7). ``counters``
+    accumulates [steps, iterations, max iterations, step cuts] and, if it has a fifth element, attitude
+    re-charts. With a winch, the top segment's unstretched length
+    follows the payout (model.md 2.8); when it leaves [0.5, 1.5]·l_nom the loop stops with
+    ``NEED_REMESH`` after that step so the caller can insert or remove a node.
+    Returns (status, step index (failed, or last done for NEED_REMESH), element, max|δT|).
+    """
+    hist_r, hist_ang, tens_hist, top_react = state.hist_r, state.hist_ang, state.tens_hist, state.top_react
+    cstate, chart = state.cstate, state.chart
+    s_hist_r, s_hist_ang, s_tens, s_cstate = saved.hist_r, saved.hist_ang, saved.tens_hist, saved.cstate
+    l0 = segp.l0
+    max_cuts = int(settings[S_MAX_STEP_CUTS])
+    nn = hist_r.shape[1]
+    nb = hist_ang.shape[1]
+    ns = tens_hist.shape[1]
+    top_sub = np.empty(3)
+    rc_lam = np.empty((3, 3))
+    rc_lam0 = np.empty((3, 3))
+    rc_new = np.empty((3, 3))
+    rc_tmp = np.empty(3)
+    rc_pitch = settings[S_RECHART_PITCH] if settings.shape[0] > S_RECHART_PITCH else RECHART_PITCH
+    wmode = int(winch[W_MODE])
+    wseg = int(winch[W_SEG])
+    flow = ws.flow
+    for k in range(n_steps):
+        # moving attitude chart: a body whose local pitch has passed RECHART_PITCH restarts from a chart
+        # centred on its current attitude (between steps, so a failed step's retries stay in one chart)
+        for b in range(nb):
+            if abs(hist_ang[0, b, 1]) > rc_pitch:
+                rechart_body(b, hist_ang, chart, rc_lam, rc_lam0, rc_new, rc_tmp)
+                if counters.shape[0] > 4:
+                    counters[N_RECHARTS] += 1
+        _wave_flow(t0 + (k + 1) * dt, hist_r[0], hist_r[1], hist_r[2], wave, flow)
+        dl = 0.0
+        l_old = 0.0
+        v_new = 0.0
+        if wmode > 0:
+            v_new = _winch_speed(winch, wstate, tens_hist, dt)
+            dl = v_new * dt
+            l_old = l0[wseg]
+            l0[wseg] = l_old + dl
+        st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
+        counters[N_STEPS] += 1
+        counters[N_ITERATIONS] += it
+        if it > counters[N_MAX_ITERATIONS]:
+            counters[N_MAX_ITERATIONS] = it
+        if st != OK:
+            s_hist_r[:] = hist_r
+            s_hist_ang[:] = hist_ang
+            s_tens[:] = tens_hist
+            s_cstate[:] = cstate
+            ok = False
+            for cut in range(1, max_cuts + 1):
+                nsub = 2 ** cut
+                h = dt / nsub
+                counters[N_STEP_CUTS] += 1
+                for lv in range(3):
+                    tau = -lv / nsub
+                    for a in range(nn):
+                        for i in range(3):
+                            hist_r[lv, a, i] = _quad3(s_hist_r[0, a, i], s_hist_r[1, a, i], s_hist_r[2, a, i], tau)
+                    for b in range(nb):
+                        for i in range(3):
+                            hist_ang[lv, b, i] = _quad3(s_hist_ang[0, b, i], s_hist_ang[1, b, i], s_hist_ang[2, b, i], tau)
+                for s in range(ns):
+                    tens_hist[0, s] = s_tens[0, s]
+                    tens_hist[1, s] = s_tens[0, s]
+                cstate[:] = s_cstate
+                good = True
+                for j in range(1, nsub + 1):
+                    tau = j / nsub
+                    for i in range(3):
+                        top_sub[i] = _quad_interp(top_path[k, i], s_hist_r[0, top_node, i], s_hist_r[1, top_node, i], tau)
+                    if wmode > 0:
+                        l0[wseg] = l_old + tau * dl
+                    st, it, el, md = _step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
+                    counters[N_ITERATIONS] += it
+                    if st != OK:
+                        good = False
+                        break
+                if good:
+                    # restore the history spacing dt exactly: [r^{t+dt}, r^t, r^{t-dt}]
+                    for a in range(nn):
+                        for i in range(3):
+                            hist_r[1, a, i] = s_hist_r[0, a, i]
+                            hist_r[2, a, i] = s_hist_r[1, a, i]
+                    for b in range(nb):
+                        for i in range(3):
+                            hist_ang[1, b, i] = s_hist_ang[0, b, i]
+                            hist_ang[2, b, i] = s_hist_ang[1, b, i]
+                    for s in range(ns):
+                        tens_hist[1, s] = s_tens[0, s]
+                    ok = True
+                    break
+            if not ok:
+                hist_r[:] = s_hist_r
+                hist_ang[:] = s_hist_ang
+                tens_hist[:] = s_tens
+                cstate[:] = s_cstate
+                if wmode > 0:
+                    l0[wseg] = l_old
+                return st, k, el, md
+        if wmode > 0:
+            wstate[WS_V] = v_new
+            wstate[WS_LEN] += dl
+            wstate[WS_PAID] += dl
+            if l0[wseg] > 1.5 * winch[W_LNOM] or (l0[wseg] < 0.5 * winch[W_LNOM] and dl < 0.0):
+                return NEED_REMESH, k, wseg, 0.0
+    return OK, -1, -1, 0.0

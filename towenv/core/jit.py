@@ -1,0 +1,75 @@
+"""The project's numba decorator, and a guard that keeps numba's on-disk cache consistent.
+
+``njit`` is numba's with the fast-math flags every kernel uses (reassociation and contraction allowed;
+NaN/Inf semantics kept — failure detection relies on them) and ``cache=True`` at the call sites.
+
+Numba's cache checks only the source file of the function it compiled, not the files of the kernels that
+function calls: the Houbolt step in ``houbolt.py`` compiled against an older ``cable_loads.py`` would be
+loaded from the cache after ``cable_loads.py`` changed (an upgrade, or a developer's edit). The guard below
+hashes the sources of every module that holds compiled kernels; when the hash differs from the one stored
+next to the cache, the package's cached kernels are dropped before anything is loaded (they recompile on
+first use). It costs about a millisecond per import.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+from numba import njit as _njit
+
+FASTMATH = {"reassoc", "contract", "arcp", "nsz"}
+
+#: the package's folders that hold compiled kernels (their ``__pycache__`` holds numba's cache files)
+KERNEL_FOLDERS = ("core", "envs", "linear", "verification")
+STAMP_NAME = "towenv-kernel-sources.sha1"
+
+
+def njit(*args, **kw):
+    kw.setdefault("fastmath", FASTMATH)
+    return _njit(*args, **kw)
+
+
+def kernel_sources_digest(package_root: Path | None = None) -> str:
+    """SHA-1 over the sources of every module in :data:`KERNEL_FOLDERS` (names and contents)."""
+    root = package_root or Path(__file__).resolve().parent.parent
+    h = hashlib.sha1()
+    for folder in KERNEL_FOLDERS:
+        for p in sorted((root / folder).glob("*.py")):
+            h.update(f"{folder}/{p.name}\0".encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def drop_stale_caches(package_root: Path | None = None) -> bool:
+    """Delete the package's numba cache files if the kernel sources changed since they were written.
+    Returns True if files were deleted. Read-only installs are left alone (numba then caches under its
+    user-wide folder, keyed by the source path; ``NUMBA_CACHE_DIR`` users clear that folder themselves)."""
+    root = package_root or Path(__file__).resolve().parent.parent
+    stamp = root / "core" / "__pycache__" / STAMP_NAME
+    digest = kernel_sources_digest(root)
+    try:
+        if stamp.read_text().strip() == digest:
+            return False
+    except OSError:
+        pass
+    dropped = False
+    try:
+        for folder in KERNEL_FOLDERS:
+            cache = root / folder / "__pycache__"
+            if not cache.is_dir():
+                continue
+            for f in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
+                f.unlink(missing_ok=True)
+                dropped = True
+        stamp.parent.mkdir(exist_ok=True)
+        tmp = stamp.with_name(f"{STAMP_NAME}.{os.getpid()}.tmp")
+        tmp.write_text(digest + "\n")
+        os.replace(tmp, stamp)
+    except OSError:
+        pass
+    return dropped
+
+
+if os.environ.get("TOWENV_KEEP_NUMBA_CACHE") != "1":
+    drop_stale_caches()
