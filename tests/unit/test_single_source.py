@@ -93,3 +93,42 @@ def test_model_structures_match_the_arrays_they_name():
     assert w.blam.shape == (nb, 3, 3) and w.flow.shape == (nn, 3) and w.bkc.shape == (max(nb, 1), 9)
     assert isinstance(kd.saved, model.SavedStep) and kd.saved.hist_r.shape == sim.hist_r.shape
     assert isinstance(kd.wave, model.WaveField)
+
+
+def test_one_morison_drag_for_kernels_statics_and_linearisation():
+    """Issue 16, item 2: the cable drag formula is written once (towenv.core.cable_loads.morison_drag and its
+    Jacobian morison_damping); the statics and the linearisation call it, and it agrees with the independent
+    numpy twin (to round-off) and with a finite-difference Jacobian."""
+    from pathlib import Path
+    from towenv.core import cable_loads, statics
+    from towenv.linear import eqlin
+    from towenv.verification.twin import morison_drag_np
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        vr = rng.normal(size=3) * rng.choice([1e-3, 1.0, 5.0])
+        t = rng.normal(size=3)
+        t /= np.linalg.norm(t)
+        kn, kt = rng.uniform(0.1, 50.0, 2)
+        f = np.array(cable_loads.morison_drag(*vr, *t, kn, kt))
+        B = np.zeros((1, 1, 3, 3))
+        cable_loads.morison_damping(*vr, *t, kn, kt, B, 0, 0)
+        f_np, B_np = morison_drag_np(vr, t, kn, kt)
+        scale = max(1.0, np.abs(f_np).max())
+        assert np.allclose(f, f_np, rtol=1e-12, atol=1e-12 * scale)
+        assert np.allclose(B[0, 0], B_np, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(B_np).max()))
+        h = 1e-6 * max(1.0, np.linalg.norm(vr))
+        fd = np.column_stack([(np.array(cable_loads.morison_drag(*(vr + h * e), *t, kn, kt))
+                               - np.array(cable_loads.morison_drag(*(vr - h * e), *t, kn, kt))) / (2 * h)
+                              for e in np.eye(3)])
+        assert np.allclose(-fd, B[0, 0], rtol=1e-5, atol=1e-6 * max(1.0, np.abs(B_np).max()))
+        # the statics' whole-segment drag is the same formula with k = ½ρ C D l
+        rho, diam, l0, cn, ct = 1025.0, 0.02, 3.0, 1.5, 0.01
+        assert np.array_equal(statics._segment_drag(t, vr, rho, diam, l0, cn, ct),
+                              np.array(cable_loads.morison_drag(*vr, *t, 0.5 * rho * cn * diam * l0,
+                                                                0.5 * rho * ct * diam * l0)))
+    # nobody else writes the formula: "kt * avt * vt" appears in cable_loads only (and the twin, on purpose)
+    root = Path(cable_loads.__file__).resolve().parents[1]
+    writers = sorted(str(p.relative_to(root)) for p in root.rglob("*.py")
+                     if "* avt * vt" in p.read_text() or "abs(vt) * vt" in p.read_text())
+    assert writers == ["core/cable_loads.py", "verification/twin.py"], writers
+    assert eqlin.morison_drag is cable_loads.morison_drag and eqlin.morison_damping is cable_loads.morison_damping

@@ -34,6 +34,47 @@ def current_at(z, cur_z, cur_v, out):
 
 
 @njit(cache=True)
+def morison_drag(vr0, vr1, vr2, t0, t1, t2, kn, kt):
+    """Morison drag of a cable element with unit tangent ``t`` at relative velocity ``v_r`` (velocity minus
+    current/orbital flow), vector normal form (model.md 2.3 / erratum E6): ``−kn |v_n| v_n − kt |v_t| v_t t``
+    with ``v_t = v_r·t``, ``v_n = v_r − v_t t``, ``kn = ½ρ C_n D l``, ``kt = ½ρ C_t D l``; returned as three
+    numbers (x, y, z). The one drag formula of the project: the time-step kernels, the statics and the
+    linearisation call it (the numpy twin in towenv.verification keeps an independent copy on purpose: it
+    is the check)."""
+    vt_mag = vr0 * t0 + vr1 * t1 + vr2 * t2
+    vn0 = vr0 - vt_mag * t0
+    vn1 = vr1 - vt_mag * t1
+    vn2 = vr2 - vt_mag * t2
+    vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
+    avt = abs(vt_mag)
+    return (-kn * vn_abs * vn0 - kt * avt * vt_mag * t0, -kn * vn_abs * vn1 - kt * avt * vt_mag * t1,
+            -kn * vn_abs * vn2 - kt * avt * vt_mag * t2)
+
+
+@njit(cache=True)
+def morison_damping(vr0, vr1, vr2, t0, t1, t2, kn, kt, out, s, e):
+    """Its Jacobian ``−∂drag/∂v_r`` = ``kn(|v_n|(1 − t tᵀ) + v_n v_nᵀ/|v_n|) + 2 kt |v_t| t tᵀ``, written to
+    ``out[s, e]`` (a 4-D array of 3×3 blocks: the kernels' per-segment-end layout)."""
+    vt_mag = vr0 * t0 + vr1 * t1 + vr2 * t2
+    vn0 = vr0 - vt_mag * t0
+    vn1 = vr1 - vt_mag * t1
+    vn2 = vr2 - vt_mag * t2
+    vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
+    avt = abs(vt_mag)
+    t = (t0, t1, t2)
+    for i in range(3):
+        for j in range(3):
+            tt = t[i] * t[j]
+            proj = (1.0 if i == j else 0.0) - tt
+            out[s, e, i, j] = kn * vn_abs * proj + 2.0 * kt * avt * tt
+    if vn_abs > 1e-12:
+        vn = (vn0, vn1, vn2)
+        for i in range(3):
+            for j in range(3):
+                out[s, e, i, j] += kn * vn[i] * vn[j] / vn_abs
+
+
+@njit(cache=True)
 def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
                   tang, stretched, drag, bmat, madd):
     """Per-segment tangent, stretched length, Morison drag, drag damping matrices and added mass.
@@ -78,26 +119,11 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
             vr0 = v[nd, 0] - vc[0]
             vr1 = v[nd, 1] - vc[1]
             vr2 = v[nd, 2] - vc[2]
-            vt_mag = vr0 * t0 + vr1 * t1 + vr2 * t2
-            vn0 = vr0 - vt_mag * t0
-            vn1 = vr1 - vt_mag * t1
-            vn2 = vr2 - vt_mag * t2
-            vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
-            avt = abs(vt_mag)
-            drag[s, e, 0] = -kn * vn_abs * vn0 - kt * avt * vt_mag * t0
-            drag[s, e, 1] = -kn * vn_abs * vn1 - kt * avt * vt_mag * t1
-            drag[s, e, 2] = -kn * vn_abs * vn2 - kt * avt * vt_mag * t2
-            # B = kn(|vn|(1 - t t^T) + vn vn^T/|vn|) + 2 kt |vt| t t^T
-            for i in range(3):
-                for j in range(3):
-                    tt = tang[s, i] * tang[s, j]
-                    proj = (1.0 if i == j else 0.0) - tt
-                    bmat[s, e, i, j] = kn * vn_abs * proj + 2.0 * kt * avt * tt
-            if vn_abs > 1e-12:
-                vn = (vn0, vn1, vn2)
-                for i in range(3):
-                    for j in range(3):
-                        bmat[s, e, i, j] += kn * vn[i] * vn[j] / vn_abs
+            d0, d1, d2 = morison_drag(vr0, vr1, vr2, t0, t1, t2, kn, kt)
+            drag[s, e, 0] = d0
+            drag[s, e, 1] = d1
+            drag[s, e, 2] = d2
+            morison_damping(vr0, vr1, vr2, t0, t1, t2, kn, kt, bmat, s, e)
         area = 0.25 * math.pi * diam[s] * diam[s]
         amt = cat[s] * rho * area * l0[s]
         amn = can[s] * rho * area * l0[s]

@@ -20,7 +20,7 @@ from .body_dynamics import (_condense, _rotational_stiffness, _translational_dam
                             aft_segment_stiffness, body_loads, place_aft_nodes)
 from .cable_loads import current_at, node_assembly, node_reaction, segment_loads
 from .orbital_flow import _wave_flow
-from .rotations import (_chart_rotation, _inv3, body_rotation, euler_rates_to_omega, omega_dot_to_euler_acc,
+from .rotations import (_chart_rotation, _inv3, euler_rates_to_omega, omega_dot_to_euler_acc,
                         rechart_body)
 from .tension_solve import (_positions_from_tensions, assemble_tension_system, thesis_recursion_solve,
                             tree_ldlt_solve)
@@ -433,7 +433,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     ``NEED_REMESH`` after that step so the caller can insert or remove a node.
     Returns (status, step index (failed, or last done for NEED_REMESH), element, max|δT|).
     """
-    hist_r, hist_ang, tens_hist, top_react = state.hist_r, state.hist_ang, state.tens_hist, state.top_react
+    hist_r, hist_ang, tens_hist = state.hist_r, state.hist_ang, state.tens_hist
     cstate, chart = state.cstate, state.chart
     s_hist_r, s_hist_ang, s_tens, s_cstate = saved.hist_r, saved.hist_ang, saved.tens_hist, saved.cstate
     l0 = segp.l0

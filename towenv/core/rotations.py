@@ -8,7 +8,6 @@ import math
 import numpy as np
 
 from .jit import njit
-from .layout import (RECHART_PITCH)
 
 
 @njit(cache=True)

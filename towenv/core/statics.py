@@ -17,15 +17,15 @@ import numpy as np
 from .layout import BP_AFT_TOW_POINT
 from scipy.optimize import brentq
 
+from .cable_loads import morison_drag
 from .kernels import FREE, PRESCRIBED_AFT, body_loads, current_at, rotation_matrix
 from .system import System
 
 
 def _segment_drag(t, vrel, rho, diam, l0, cn, ct):
-    vt = float(vrel @ t)
-    vn = vrel - vt * t
-    vn_abs = float(np.linalg.norm(vn))
-    return -0.5 * rho * diam * l0 * (cn * vn_abs * vn + ct * abs(vt) * vt * t)
+    """Morison drag of a whole segment (the kernels' :func:`~towenv.core.cable_loads.morison_drag`)."""
+    return np.array(morison_drag(vrel[0], vrel[1], vrel[2], t[0], t[1], t[2], 0.5 * rho * cn * diam * l0,
+                                 0.5 * rho * ct * diam * l0))
 
 
 def _current(sys: System, z):

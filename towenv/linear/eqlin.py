@@ -28,43 +28,8 @@ import numpy as np
 from ..core.layout import BP_CB
 
 from ..core.jit import njit
-from ..core.kernels import body_loads, current_at, rotation_matrix
-
-
-@njit(cache=True)
-def cable_drag(v0, v1, v2, t, kn, kt, out):
-    """Drag of a segment end at relative velocity v (model of ``segment_loads``, node's share folded into kn, kt)."""
-    vt = v0 * t[0] + v1 * t[1] + v2 * t[2]
-    n0 = v0 - vt * t[0]
-    n1 = v1 - vt * t[1]
-    n2 = v2 - vt * t[2]
-    vn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-    avt = abs(vt)
-    out[0] = -kn * vn * n0 - kt * avt * vt * t[0]
-    out[1] = -kn * vn * n1 - kt * avt * vt * t[1]
-    out[2] = -kn * vn * n2 - kt * avt * vt * t[2]
-
-
-@njit(cache=True)
-def cable_tangent_damping(m, t, kn, kt, out):
-    """−∂drag/∂v at v = m (same expression as ``bmat`` in ``segment_loads``)."""
-    vt = m[0] * t[0] + m[1] * t[1] + m[2] * t[2]
-    n0 = m[0] - vt * t[0]
-    n1 = m[1] - vt * t[1]
-    n2 = m[2] - vt * t[2]
-    vna = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-    a = kn * vna
-    c = 2.0 * kt * abs(vt) - a
-    d = kn / vna if vna > 1e-12 else 0.0
-    out[0, 0] = a + c * t[0] * t[0] + d * n0 * n0
-    out[0, 1] = c * t[0] * t[1] + d * n0 * n1
-    out[0, 2] = c * t[0] * t[2] + d * n0 * n2
-    out[1, 0] = c * t[1] * t[0] + d * n1 * n0
-    out[1, 1] = a + c * t[1] * t[1] + d * n1 * n1
-    out[1, 2] = c * t[1] * t[2] + d * n1 * n2
-    out[2, 0] = c * t[2] * t[0] + d * n2 * n0
-    out[2, 1] = c * t[2] * t[1] + d * n2 * n1
-    out[2, 2] = a + c * t[2] * t[2] + d * n2 * n2
+from ..core.cable_loads import current_at, morison_damping, morison_drag
+from ..core.kernels import body_loads, rotation_matrix
 
 
 @njit(cache=True)
@@ -252,7 +217,8 @@ def cable_equivalent(mode, mean, tang, kn, kt, V, Sig, nphi, gx, gw, out):
     X = np.empty((nmax, 3))
     F = np.empty((nmax, 3))
     w = np.empty(nmax)
-    Jk = np.empty((3, 3))
+    Jk4 = np.empty((1, 1, 3, 3))
+    Jk = Jk4[0, 0]
     Jav = np.empty((3, 3))
     f3 = np.empty(3)
     res = np.empty((3, 3))
@@ -270,8 +236,9 @@ def cable_equivalent(mode, mean, tang, kn, kt, V, Sig, nphi, gx, gw, out):
             for k in range(n):
                 for i in range(3):
                     vk[i] = mean[e, i] + X[k, i]
-                cable_drag(vk[0], vk[1], vk[2], tang[e], kn[e], kt[e], f3)
-                cable_tangent_damping(vk, tang[e], kn[e], kt[e], Jk)
+                te = tang[e]
+                f3[0], f3[1], f3[2] = morison_drag(vk[0], vk[1], vk[2], te[0], te[1], te[2], kn[e], kt[e])
+                morison_damping(vk[0], vk[1], vk[2], te[0], te[1], te[2], kn[e], kt[e], Jk4, 0, 0)
                 for i in range(3):
                     F[k, i] = f3[i]
                     for j in range(3):
