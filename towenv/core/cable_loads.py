@@ -34,32 +34,31 @@ def current_at(z, cur_z, cur_v, out):
 
 
 @njit(cache=True)
-def morison_drag(vr0, vr1, vr2, t0, t1, t2, kn, kt):
-    """Morison drag of a cable element with unit tangent ``t`` at relative velocity ``v_r`` (velocity minus
-    current/orbital flow), vector normal form (model.md 2.3 / erratum E6): ``−kn |v_n| v_n − kt |v_t| v_t t``
-    with ``v_t = v_r·t``, ``v_n = v_r − v_t t``, ``kn = ½ρ C_n D l``, ``kt = ½ρ C_t D l``; returned as three
-    numbers (x, y, z). The one drag formula of the project: the time-step kernels, the statics and the
-    linearisation call it (the numpy twin in towenv.verification keeps an independent copy on purpose: it
-    is the check)."""
+def relative_velocity_parts(vr0, vr1, vr2, t0, t1, t2):
+    """Split a relative velocity ``v_r`` against a unit tangent ``t``: (v_t = v_r·t, v_n = v_r − v_t t (three
+    numbers), |v_n|)."""
     vt_mag = vr0 * t0 + vr1 * t1 + vr2 * t2
     vn0 = vr0 - vt_mag * t0
     vn1 = vr1 - vt_mag * t1
     vn2 = vr2 - vt_mag * t2
-    vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
+    return vt_mag, vn0, vn1, vn2, math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
+
+
+@njit(cache=True)
+def morison_force(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt):
+    """Morison drag of a cable element, vector normal form (model.md 2.3 / erratum E6):
+    ``−kn |v_n| v_n − kt |v_t| v_t t`` with ``kn = ½ρ C_n D l``, ``kt = ½ρ C_t D l`` (three numbers). The one
+    drag formula of the project — the time-step kernels, the statics and the linearisation use it (the numpy
+    twin in towenv.verification keeps an independent copy on purpose: it is the check)."""
     avt = abs(vt_mag)
     return (-kn * vn_abs * vn0 - kt * avt * vt_mag * t0, -kn * vn_abs * vn1 - kt * avt * vt_mag * t1,
             -kn * vn_abs * vn2 - kt * avt * vt_mag * t2)
 
 
 @njit(cache=True)
-def morison_damping(vr0, vr1, vr2, t0, t1, t2, kn, kt, out, s, e):
-    """Its Jacobian ``−∂drag/∂v_r`` = ``kn(|v_n|(1 − t tᵀ) + v_n v_nᵀ/|v_n|) + 2 kt |v_t| t tᵀ``, written to
+def morison_jacobian(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt, out, s, e):
+    """Its Jacobian ``−∂drag/∂v_r = kn(|v_n|(1 − t tᵀ) + v_n v_nᵀ/|v_n|) + 2 kt |v_t| t tᵀ``, written to
     ``out[s, e]`` (a 4-D array of 3×3 blocks: the kernels' per-segment-end layout)."""
-    vt_mag = vr0 * t0 + vr1 * t1 + vr2 * t2
-    vn0 = vr0 - vt_mag * t0
-    vn1 = vr1 - vt_mag * t1
-    vn2 = vr2 - vt_mag * t2
-    vn_abs = math.sqrt(vn0 * vn0 + vn1 * vn1 + vn2 * vn2)
     avt = abs(vt_mag)
     t = (t0, t1, t2)
     for i in range(3):
@@ -72,6 +71,20 @@ def morison_damping(vr0, vr1, vr2, t0, t1, t2, kn, kt, out, s, e):
         for i in range(3):
             for j in range(3):
                 out[s, e, i, j] += kn * vn[i] * vn[j] / vn_abs
+
+
+@njit(cache=True)
+def morison_drag(vr0, vr1, vr2, t0, t1, t2, kn, kt):
+    """:func:`morison_force` at relative velocity ``v_r`` (three numbers)."""
+    vt_mag, vn0, vn1, vn2, vn_abs = relative_velocity_parts(vr0, vr1, vr2, t0, t1, t2)
+    return morison_force(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt)
+
+
+@njit(cache=True)
+def morison_damping(vr0, vr1, vr2, t0, t1, t2, kn, kt, out, s, e):
+    """:func:`morison_jacobian` at relative velocity ``v_r``, into ``out[s, e]``."""
+    vt_mag, vn0, vn1, vn2, vn_abs = relative_velocity_parts(vr0, vr1, vr2, t0, t1, t2)
+    morison_jacobian(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt, out, s, e)
 
 
 @njit(cache=True)
@@ -119,11 +132,12 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
             vr0 = v[nd, 0] - vc[0]
             vr1 = v[nd, 1] - vc[1]
             vr2 = v[nd, 2] - vc[2]
-            d0, d1, d2 = morison_drag(vr0, vr1, vr2, t0, t1, t2, kn, kt)
+            vt_mag, vn0, vn1, vn2, vn_abs = relative_velocity_parts(vr0, vr1, vr2, t0, t1, t2)
+            d0, d1, d2 = morison_force(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt)
             drag[s, e, 0] = d0
             drag[s, e, 1] = d1
             drag[s, e, 2] = d2
-            morison_damping(vr0, vr1, vr2, t0, t1, t2, kn, kt, bmat, s, e)
+            morison_jacobian(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt, bmat, s, e)
         area = 0.25 * math.pi * diam[s] * diam[s]
         amt = cat[s] * rho * area * l0[s]
         amn = can[s] * rho * area * l0[s]
