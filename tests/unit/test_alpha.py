@@ -126,7 +126,7 @@ def test_agrees_with_houbolt_on_a_towed_scene_with_rigid_bodies():
     sc = towenv.load_scene("two_part_tow_1")
     h = towenv.make_simulator(sc, dt=0.01)
     a = towenv.make_simulator(sc, method="generalized_alpha", dt=0.01)
-    assert isinstance(a, GeneralizedAlphaSimulator)
+    assert a.scheme.name == "generalized_alpha" and type(a) is towenv.Simulator
     assert a.top_tension == pytest.approx(h.top_tension, rel=1e-3)
     for _ in range(20):
         h.advance(1.0)
@@ -216,8 +216,10 @@ def test_bad_options_give_clear_errors():
     with pytest.raises(ValueError, match="settle_time"):
         towenv.make_simulator(peer_deck(settle_time=1.0), method="generalized_alpha")
     sim = towenv.make_simulator(peer_deck(method="newmark"))
-    assert isinstance(sim, GeneralizedAlphaSimulator) and sim.method == "newmark"
-    assert towenv.load_scene("peer_deck").solver.rho_inf == 0.2 and sim.rho_inf == 0.2
+    assert sim.scheme.name == "newmark" and sim.scheme.method == "newmark"
+    assert towenv.load_scene("peer_deck").solver.rho_inf == 0.2 and sim.scheme.rho_inf == 0.2
+    shorthand = GeneralizedAlphaSimulator(peer_deck(), method="newmark", rho_inf=0.5)
+    assert shorthand.scheme.name == "newmark" and shorthand.scene.solver.rho_inf == 0.5
     assert axial_cfl_step(peer_deck()) > 0
 
 
@@ -232,9 +234,10 @@ def test_coloured_band_jacobian_equals_the_dense_one(name):
     sim = towenv.make_simulator(name, method="generalized_alpha", dt=0.05)
     sim.advance(2.0)
     s, h = sim.system, 0.05
+    sim = sim.scheme                   # the α scheme's own state and structure
     tr = sim._tr
-    tr[2][...] = sim.xacc
-    tr[6][...] = sim.xaacc
+    tr.acc1[...] = sim.xacc
+    tr.aacc1[...] = sim.xaacc
     args = (h, sim.coefs, s.top_node, sim.xr[s.top_node] + h * sim.xv[s.top_node], sim.xv[s.top_node].copy(),
             s.topo(), s.segp(), s.bodyp(), s.env(), sim.axial_damping, sim._xws, sim._st, tr, sim._gk, sim._gi)
     n = len(sim._R)
@@ -249,10 +252,10 @@ def test_coloured_band_jacobian_equals_the_dense_one(name):
             Jc[i, j] = ab[i, j - i + kl]
     Jd = np.zeros((n, n))
     for p in range(len(sim._gk)):
-        arr = tr[2] if sim._gk[p] == 0 else tr[6]
+        arr = tr.acc1 if sim._gk[p] == 0 else tr.aacc1
         j = sim._gi[p]
         for comp in range(3):
-            scale = 1 + abs(tr[0][j, comp]) if sim._gk[p] == 0 else 1.0
+            scale = 1 + abs(tr.r1[j, comp]) if sim._gk[p] == 0 else 1.0
             eps = A.FD_REL * scale / (h * h * sim.coefs[2])
             o = arr[j, comp]
             arr[j, comp] = o + eps

@@ -43,25 +43,31 @@ def test_explicit_rejects_bad_options():
 def test_solver_method_selects_the_integrator():
     """One interface: the scene's solver.method picks Houbolt, generalized-α / Newmark, an explicit scheme or
     the quasi-static sequence; all agree on a steady tow (the quasi-static sequence exactly, the others to 1e-4)."""
-    from towenv.core.explicit import ExplicitSimulator
-    from towenv.core.quasistatic import QuasiStaticSimulator
+    from towenv.core.alpha import AlphaScheme
+    from towenv.core.explicit import ExplicitScheme
+    from towenv.core.quasistatic import QuasiStaticScheme
     ref = towenv.simulate(peer_deck(speed=2.0, dt=0.05), duration=5.0).top_tension[-1]
     rk4 = towenv.make_simulator(peer_deck(speed=2.0, dt=1.6e-3), method="rk4", axial_damping_ratio=0.1)
-    assert isinstance(rk4, ExplicitSimulator)
+    assert isinstance(rk4.scheme, ExplicitScheme) and rk4.scheme.name == "rk4" and type(rk4) is towenv.Simulator
     rk4.advance(5.0)
     assert rk4.top_tension == pytest.approx(ref, rel=1e-4)
-    from towenv.core.alpha import GeneralizedAlphaSimulator
     for method in ("generalized_alpha", "newmark"):
         ga = towenv.make_simulator(peer_deck(speed=2.0, dt=0.05), method=method)
-        assert isinstance(ga, GeneralizedAlphaSimulator)
+        assert isinstance(ga.scheme, AlphaScheme) and ga.scheme.name == method
         ga.advance(5.0)
         assert ga.top_tension == pytest.approx(ref, rel=1e-4)
     qs = towenv.make_simulator(peer_deck(speed=2.0, dt=0.5), method="quasi_static")
-    assert isinstance(qs, QuasiStaticSimulator)
+    assert isinstance(qs.scheme, QuasiStaticScheme)
     qs.advance(5.0)
     assert qs.top_tension == pytest.approx(ref, rel=1e-6)
     with pytest.raises(towenv.SceneError, match="solver.method"):
         towenv.make_simulator(peer_deck(), method="leapfrog")
+    # one factory: towenv.Simulator, make_simulator and the shorthand constructors give the same scheme
+    for method in ("houbolt", "rk2", "newmark", "quasi_static"):
+        assert towenv.Simulator(peer_deck(method=method)).scheme.name == method
+        assert towenv.make_simulator(peer_deck(), method=method).scheme.name == method
+    from towenv.core.explicit import ExplicitSimulator
+    assert ExplicitSimulator(peer_deck(), scheme="euler").scheme.name == "euler"
 
 
 def test_as_published_tension_recursion_fails_at_the_thesis_time_step_guide():

@@ -245,19 +245,21 @@ def test_cli_uses_the_scheme_solver_method_names(tmp_path, monkeypatch):
     real = run.simulate
 
     def spy(sim, *a, **k):
-        seen.append(type(sim).__name__)
+        seen.append(sim.scheme.name)
         return real(sim, *a, **k)
 
     monkeypatch.setattr(run, "simulate", spy)
     assert cli_main(["simulate", "two_part_tow_1", "--duration", "0.2", "--dt", "0.0005", "--set",
                      "solver.method=euler", "--out", str(tmp_path / "o"), "-q", "--no-plots"]) == 0
-    assert seen == ["ExplicitSimulator"]
+    assert seen == ["euler"]
 
 
-def test_simulator_refuses_a_method_it_does_not_integrate():
-    with pytest.raises(SceneError, match="solver.method.*make_simulator"):
-        towenv.Simulator("two_part_tow_1", **{"solver.method": "euler"})
-    assert type(towenv.make_simulator("two_part_tow_1", method="euler")).__name__ == "ExplicitSimulator"
+def test_simulator_uses_the_method_the_scene_names():
+    """towenv.Simulator holds the scheme solver.method names (one factory for the API, the CLI, the envs)."""
+    assert towenv.Simulator("two_part_tow_1", **{"solver.method": "euler"}).scheme.name == "euler"
+    assert towenv.make_simulator("two_part_tow_1", method="euler").scheme.name == "euler"
+    with pytest.raises(SceneError, match="solver.method"):
+        towenv.Simulator("two_part_tow_1", **{"solver.method": "leapfrog"})
 
 
 # ------------------------------------------------------------------------------------------ 8. explicit

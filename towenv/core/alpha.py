@@ -50,8 +50,8 @@ from .layout import N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS, N_STEP_
 
 from . import kernels as K
 from .model import AlphaState, AlphaTrial
-from .explicit import ExplicitSimulator, _rates
-from .simulator import load
+from .explicit import ExplicitScheme, _rates
+from .simulator import Simulator
 
 njit = K.njit
 
@@ -533,48 +533,39 @@ def _structure(s):
 
 
 # ------------------------------------------------------------------------------------------------
-class GeneralizedAlphaSimulator(ExplicitSimulator):
-    """The same scene integrated by generalized-α (``method="generalized_alpha"``, high-frequency
-    spectral radius ``rho_inf`` ∈ [0, 1]) or Newmark average acceleration (``method="newmark"``).
+class AlphaScheme(ExplicitScheme):
+    """Generalized-α (``solver.method = "generalized_alpha"``, high-frequency spectral radius
+    ``solver.rho_inf`` ∈ [0, 1]) or Newmark average acceleration (``"newmark"``).
 
-    Same interface as :class:`Simulator` (advance, advance_steps, snapshot/restore, reset, outputs);
-    the state is (positions, velocities, Euler angles, Euler-angle rates) plus the algorithmic
-    accelerations and the loads ``f`` of the last step (both part of snapshots)."""
+    The state is (positions, velocities, Euler angles, Euler-angle rates) plus the algorithmic
+    accelerations and the loads ``f`` of the last step (all part of snapshots)."""
 
-    def __init__(self, scene, method: str = "generalized_alpha", rho_inf: float = 0.2,
-                 axial_damping_ratio: float = 0.0, **overrides):
+    def __init__(self, sim, method: str = "generalized_alpha", rho_inf: float = 0.2, axial_damping_ratio: float = 0.0):
+        super().__init__(sim, "rk2", axial_damping_ratio)
         if method not in METHODS:
             raise ValueError(f"method: must be one of {list(METHODS)} (got {method!r})")
         if isinstance(rho_inf, bool) or not isinstance(rho_inf, (int, float, np.floating)) or not (0 <= rho_inf <= 1):
             raise ValueError(f"rho_inf: must be a number within [0, 1] (got {rho_inf!r})")
-        from .simulator import SolverSettings
-        short = {k: v for k, v in overrides.items() if k in SolverSettings.__dataclass_fields__}
-        dotted = {k: v for k, v in overrides.items() if k not in short}
-        dotted.update({f"solver.{k}": v for k, v in short.items()})
-        sc = load(scene, dotted)
-        if getattr(sc, "compensator", None) is not None or getattr(sc, "winch", None) is not None:
-            raise ValueError(f"solver.method = {method!r}: scenes with a compensator or winch are not supported "
-                             "(use houbolt)")
-        sea = getattr(sc, "sea", None)
-        if sea is not None and getattr(sea, "orbital_velocities", False):
-            raise ValueError(f"sea.orbital_velocities: not supported by solver.method = {method!r} (use houbolt)")
-        if float(getattr(sc.solver, "settle_time", 0.0) or 0.0) > 0:
-            raise ValueError(f"solver.settle_time: must be 0 with solver.method = {method!r} (the start is already "
-                             "the steady tow)")
-        self.method = method
+        self.name = self.method = method
         self.rho_inf = float(rho_inf)
         self.coefs = coefficients(method, self.rho_inf)
-        super().__init__(sc, scheme="rk2", axial_damping_ratio=axial_damping_ratio)
-        self.scheme = method
+
+    def start(self):
+        sc = self.sim.scene
+        if float(getattr(sc.solver, "settle_time", 0.0) or 0.0) > 0:
+            raise ValueError(f"solver.settle_time: must be 0 with solver.method = {self.method!r} (the start is already "
+                             "the steady tow)")
+        super().start()
         self._alpha_init()
 
     def _alpha_init(self):
-        s = self.system
+        sim = self.sim
+        s = sim.system
         nn, nb = s.n_nodes, s.n_rigid
         z = np.zeros
         self.xdang = z((nb, 3))
         for b in range(nb):
-            dang = (3 * self.hist_ang[0, b] - 4 * self.hist_ang[1, b] + self.hist_ang[2, b]) / (2 * self.dt)
+            dang = (3 * self.sim.hist_ang[0, b] - 4 * self.sim.hist_ang[1, b] + self.sim.hist_ang[2, b]) / (2 * self.sim.dt)
             self.xdang[b] = dang
         self.xacc, self.xf = z((nn, 3)), z((nn, 3))
         self.xaacc, self.xaf = z((nb, 3)), z((nb, 3))
@@ -606,13 +597,13 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
         self.xaf[...] = qdd
         self._sync()
         self._ga_initial = tuple(a.copy() for a in self._st) + (self.xtens.copy(), self.xomg.copy(),
-                                                                 self.top_react.copy(), self.hist_r.copy(),
-                                                                 self.hist_ang.copy(), self.tens_hist.copy())
+                                                                 self.sim.top_react.copy(), self.sim.hist_r.copy(),
+                                                                 self.sim.hist_ang.copy(), self.sim.tens_hist.copy())
 
     def _loads_at_state(self):
         """f = M⁻¹F at the stored state (node accelerations, Euler-angle accelerations); also refreshes
         the tensions and the load work arrays (tow-point reaction) of that state."""
-        s = self.system
+        s = self.sim.system
         tr = self._tr
         for b in range(s.n_rigid):
             K.euler_rates_to_omega(self.xang[b], self.xdang[b], self.xomg[b])
@@ -625,17 +616,17 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
             K.omega_dot_to_euler_acc(self.xang[b], self.xdang[b], self.xomg[b], tr.out_domg[b], tr.qdd[b])
         return tr.out_a.copy(), tr.qdd.copy()
 
-    def _run(self, tops, dt, t_start):
+    def run(self, tops, dt, t_start):
         if not hasattr(self, "_ga_initial"):
             raise ValueError(f"solver.settle_time: must be 0 with solver.method = {self.method!r}")
-        s = self.system
+        s = self.sim.system
         prev = self.xr[s.top_node].copy()
-        settings = self.settings.array()
+        settings = self.sim.settings.array()
         st, k, el, fres = alpha_advance(len(tops), dt, tops, prev, self.coefs, settings, s.top_node, s.topo(),
                                         s.segp(), s.bodyp(), s.env(), self.axial_damping, self._xws, self._st,
                                         self._tr, self._bk, self._gk, self._gi, self._R, self._R0, *self._col,
                                         self._ab, self._kl, self._ku, self._piv, self._jstate, self._acnt)
-        self.counters[:N_RECHARTS] = self._acnt[:N_RECHARTS]    # every counter but the re-charts
+        self.sim.counters[:N_RECHARTS] = self._acnt[:N_RECHARTS]    # every counter but the re-charts
         # body rates and tensions of the state (after a failure: of the last good step, re-evaluated)
         for b in range(s.n_rigid):
             K.euler_rates_to_omega(self.xang[b], self.xdang[b], self.xomg[b])
@@ -648,53 +639,50 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
             from ..errors import SimulationDivergence
             name = self.method if self.method == "newmark" else f"generalized_alpha (rho_inf = {self.rho_inf:g})"
             cause = {K.FAIL_NEWTON: f"Newton iteration on the {name} step did not converge "
-                                    f"(after {self.settings.max_step_cuts} step halvings)",
+                                    f"(after {self.sim.settings.max_step_cuts} step halvings)",
                      K.FAIL_NAN: f"non-finite state in the {name} step",
                      K.FAIL_STRETCH: f"strain above solver.max_strain in the {name} step",
                      K.FAIL_ANGLE: f"body pitch beyond ±85° in the {name} step"}.get(st, str(st))
             raise SimulationDivergence(t_start + (k + 1) * dt, self._where(st, el), cause,
-                                       int(self.settings.max_iterations), float(fres))
+                                       int(self.sim.settings.max_iterations), float(fres))
 
     def _where(self, status, el):
         if status == K.FAIL_NEWTON and el >= 0:
             kind, j = int(self._gk[el]), int(self._gi[el])
             if kind == 1:
-                return self._element_name(K.FAIL_ANGLE, j)
-            for lm in self.system.lines:
+                return self.sim._element_name(K.FAIL_ANGLE, j)
+            for lm in self.sim.system.lines:
                 if j in lm.nodes:
                     return f"node {int(np.where(lm.nodes == j)[0][0])} of line {lm.name!r} (global {j})"
             return f"node {j}"
         if status == K.FAIL_NAN and el >= 0:
             return f"node {el}"
-        return self._element_name(status, el)
+        return self.sim._element_name(status, el)
 
     def _sync(self):
         super()._sync()
-        dt = self.settings.dt
-        for b in range(self.system.n_rigid):
-            self.hist_ang[1, b] = self.xang[b] - dt * self.xdang[b]
-            self.hist_ang[2, b] = self.xang[b] - 2 * dt * self.xdang[b]
+        dt = self.sim.settings.dt
+        for b in range(self.sim.system.n_rigid):
+            self.sim.hist_ang[1, b] = self.xang[b] - dt * self.xdang[b]
+            self.sim.hist_ang[2, b] = self.xang[b] - 2 * dt * self.xdang[b]
 
-    @property
-    def stats(self):
-        out = super().stats
+    def stats(self, out):
         out["jacobians"] = int(self._acnt[4]) if hasattr(self, "_acnt") else 0
         return out
 
     def reset(self):
         super().reset()
         if hasattr(self, "_ga_initial"):
-            for dst, src in zip(self._st + (self.xtens, self.xomg, self.top_react, self.hist_r, self.hist_ang,
-                                            self.tens_hist), self._ga_initial):
+            for dst, src in zip(self._st + (self.xtens, self.xomg, self.sim.top_react, self.sim.hist_r, self.sim.hist_ang,
+                                            self.sim.tens_hist), self._ga_initial):
                 dst[...] = src
             self._jstate[:] = 0.0
             self._acnt[:] = 0
 
-    def snapshot(self):
-        snap = super().snapshot()
+    def snapshot(self, snap):
+        super().snapshot(snap)
         if hasattr(self, "_ga_initial"):
             snap.alpha = (tuple(a.copy() for a in self._st), self._ab.copy(), self._piv.copy(), self._jstate.copy())
-        return snap
 
     def restore(self, snap):
         super().restore(snap)
@@ -705,3 +693,18 @@ class GeneralizedAlphaSimulator(ExplicitSimulator):
             self._ab[...] = ab
             self._piv[...] = piv
             self._jstate[...] = js
+
+
+def GeneralizedAlphaSimulator(scene, method: str = "generalized_alpha", rho_inf: float = 0.2,
+                              axial_damping_ratio: float = 0.0, **overrides) -> Simulator:
+    """A :class:`~towenv.core.simulator.Simulator` whose ``solver.method`` is ``method``
+    ("generalized_alpha" or "newmark") with ``solver.rho_inf`` — shorthand for ``Simulator(scene,
+    method=…, rho_inf=…, axial_damping_ratio=…)``."""
+    if method not in METHODS:
+        raise ValueError(f"method: must be one of {list(METHODS)} (got {method!r})")
+    if isinstance(rho_inf, bool) or not isinstance(rho_inf, (int, float, np.floating)) or not (0 <= rho_inf <= 1):
+        raise ValueError(f"rho_inf: must be a number within [0, 1] (got {rho_inf!r})")
+    if isinstance(axial_damping_ratio, bool) or not (axial_damping_ratio >= 0 and np.isfinite(axial_damping_ratio)):
+        raise ValueError(f"axial_damping_ratio: must be >= 0 (got {axial_damping_ratio!r})")
+    return Simulator(scene, **{**overrides, "solver.method": method, "solver.rho_inf": float(rho_inf),
+                               "solver.axial_damping_ratio": float(axial_damping_ratio)})

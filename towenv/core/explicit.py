@@ -20,6 +20,7 @@ from numba import njit
 
 from . import kernels as K
 from .model import ExplicitWork
+from .schemes import TimeScheme
 from .simulator import Simulator
 
 EULER, RK2, RK4 = 0, 1, 2
@@ -264,100 +265,105 @@ def _restore(r, v, ang, omg, tens, r0, v0, a0, w0, t0):
     tens[:] = t0
 
 
-class ExplicitSimulator(Simulator):
-    """The same scene integrated explicitly (``scheme`` = "euler" (semi-implicit), "rk2" or "rk4").
+class ExplicitScheme(TimeScheme):
+    """The same scene integrated explicitly (``solver.method`` = "euler" (semi-implicit), "rk2" or "rk4").
 
-    Same interface as :class:`Simulator` for stepping and output. The start is the same quasi-static
-    configuration; the explicit state is (positions, velocities, Euler angles, body rates).
-    """
+    The start is the same quasi-static configuration; the explicit state is (positions, velocities, Euler
+    angles, body rates), written back to the Simulator's history arrays after every call (outputs,
+    snapshots)."""
 
-    def __init__(self, scene, scheme: str = "rk2", axial_damping_ratio: float = 0.0, **overrides):
-        if scheme not in SCHEMES:
-            raise ValueError(f"scheme: must be one of {sorted(SCHEMES)} (got {scheme!r})")
+    def __init__(self, sim, name: str = "rk2", axial_damping_ratio: float = 0.0):
+        super().__init__(sim)
+        if name not in SCHEMES:
+            raise ValueError(f"scheme: must be one of {sorted(SCHEMES)} (got {name!r})")
         if not (axial_damping_ratio >= 0 and np.isfinite(axial_damping_ratio)):
             raise ValueError(f"axial_damping_ratio: must be >= 0 (got {axial_damping_ratio!r})")
-        self.scheme = scheme
+        self.name = name
         self.axial_damping_ratio = float(axial_damping_ratio)
-        super().__init__(scene, **overrides)
-        s = self.system
+
+    def start(self):
+        sim = self.sim
+        s = sim.system
         # a damping ratio of each segment's axial mode, c = 2ζ l √(EA μ) (MoorDyn's BA = −2ζ gives the same c)
         self.axial_damping = 2 * self.axial_damping_ratio * s.l0 * np.sqrt(s.ea * s.mu)
-        if self.comp[K.C_MODE] > 0 or self.winch[K.W_MODE] > 0:
-            raise ValueError("ExplicitSimulator: scenes with a compensator or winch are not supported")
-        self._explicit_init()
-
-    def _explicit_init(self):
-        s = self.system
-        dt = self.settings.dt
-        self.xr = self.hist_r[0].copy()
-        self.xv = (3 * self.hist_r[0] - 4 * self.hist_r[1] + self.hist_r[2]) / (2 * dt)
-        self.xang = self.hist_ang[0].copy()
+        if sim.comp[K.C_MODE] > 0 or sim.winch[K.W_MODE] > 0:
+            raise ValueError(f"solver.method = {self.name!r}: scenes with a compensator or winch are not supported")
+        dt = sim.settings.dt
+        self.xr = sim.hist_r[0].copy()
+        self.xv = (3 * sim.hist_r[0] - 4 * sim.hist_r[1] + sim.hist_r[2]) / (2 * dt)
+        self.xang = sim.hist_ang[0].copy()
         self.xomg = np.zeros_like(self.xang)
         for b in range(s.n_rigid):
-            dang = (3 * self.hist_ang[0, b] - 4 * self.hist_ang[1, b] + self.hist_ang[2, b]) / (2 * dt)
-            K.euler_rates_to_omega(self.hist_ang[0, b], dang, self.xomg[b])
-        self.xtens = self.tens_hist[0].copy()
-        nn, ns, nb = s.n_nodes, s.n_segments, s.n_rigid
+            dang = (3 * sim.hist_ang[0, b] - 4 * sim.hist_ang[1, b] + sim.hist_ang[2, b]) / (2 * dt)
+            K.euler_rates_to_omega(sim.hist_ang[0, b], dang, self.xomg[b])
+        self.xtens = sim.tens_hist[0].copy()
+        nn, nb = s.n_nodes, s.n_rigid
         z = np.zeros
-        self._xws = ExplicitWork.allocate(nn, ns, nb)
+        self._xws = ExplicitWork.allocate(nn, s.n_segments, nb)
         self._k = [(z((nn, 3)), z((nn, 3)), z((nb, 3)), z((nb, 3))) for _ in range(4)]
         self._x_initial = (self.xr.copy(), self.xv.copy(), self.xang.copy(), self.xomg.copy(), self.xtens.copy())
 
     def reset(self):
-        super().reset()
-        if hasattr(self, "_x_initial"):
-            for dst, src in zip((self.xr, self.xv, self.xang, self.xomg, self.xtens), self._x_initial):
-                dst[...] = src
+        for dst, src in zip((self.xr, self.xv, self.xang, self.xomg, self.xtens), self._x_initial):
+            dst[...] = src
 
-    def _run(self, tops, dt, t_start):
-        s = self.system
+    def run(self, tops, dt, t_start):
+        sim = self.sim
+        s = sim.system
         prev = self.xr[s.top_node].copy()
-        st, k, el = explicit_advance(len(tops), dt, SCHEMES[self.scheme], tops, prev, s.top_node, s.topo(), s.segp(),
-                                     s.bodyp(), s.env(), self.axial_damping, self.settings.max_strain, self.xr,
+        st, k, el = explicit_advance(len(tops), dt, SCHEMES[self.name], tops, prev, s.top_node, s.topo(), s.segp(),
+                                     s.bodyp(), s.env(), self.axial_damping, sim.settings.max_strain, self.xr,
                                      self.xv, self.xang, self.xomg, self.xtens, self._xws, *self._k)
         self._sync()
         if st != K.OK:
             from ..errors import SimulationDivergence
             raise SimulationDivergence(t_start + (k + 1) * dt, self._explicit_element(st, el),
-                                       f"explicit {self.scheme} step unstable: "
+                                       f"explicit {self.name} step unstable: "
                                        + {K.FAIL_NAN: "non-finite state",
-                                          K.FAIL_STRETCH: f"strain above solver.max_strain = {self.settings.max_strain:g}",
+                                          K.FAIL_STRETCH: f"strain above solver.max_strain = {sim.settings.max_strain:g}",
                                           K.FAIL_ANGLE: "body pitch beyond ±85°"}.get(st, str(st))
                                        + f" (Δt = {dt:g} s; the state is left at the last good step)")
 
     def _explicit_element(self, st, el):
         if st == K.FAIL_NAN and el >= 0:
-            return self._node_name(el)
-        return self._element_name(st, el)
+            return self.sim._node_name(el)
+        return self.sim._element_name(st, el)
 
     def _sync(self):
         """Expose the explicit state through the Simulator's history arrays (outputs, snapshots)."""
-        dt = self.settings.dt
-        self.hist_r[0] = self.xr
-        self.hist_r[1] = self.xr - dt * self.xv
-        self.hist_r[2] = self.xr - 2 * dt * self.xv
-        self.tens_hist[1] = self.tens_hist[0]
-        self.tens_hist[0] = self.xtens
-        for b in range(self.system.n_rigid):
+        sim = self.sim
+        dt = sim.settings.dt
+        sim.hist_r[0] = self.xr
+        sim.hist_r[1] = self.xr - dt * self.xv
+        sim.hist_r[2] = self.xr - 2 * dt * self.xv
+        sim.tens_hist[1] = sim.tens_hist[0]
+        sim.tens_hist[0] = self.xtens
+        for b in range(sim.system.n_rigid):
             # angle history consistent with the current Euler-angle rates
             ca, sb, cb = np.cos(self.xang[b, 1]), np.sin(self.xang[b, 0]), np.cos(self.xang[b, 0])
             p, q, r = self.xomg[b]
             dang = np.array([p + (q * sb + r * cb) * np.tan(self.xang[b, 1]), q * cb - r * sb, (q * sb + r * cb) / ca])
-            self.hist_ang[0, b] = self.xang[b]
-            self.hist_ang[1, b] = self.xang[b] - dt * dang
-            self.hist_ang[2, b] = self.xang[b] - 2 * dt * dang
+            sim.hist_ang[0, b] = self.xang[b]
+            sim.hist_ang[1, b] = self.xang[b] - dt * dang
+            sim.hist_ang[2, b] = self.xang[b] - 2 * dt * dang
         # tow-point reaction: tension and half-segment loads at the top node; unlike the implicit solver's
         # reaction it leaves out the top node's own inertia (m_node · a, a few N on the peer deck)
-        self.top_react[...] = self._xws[7][self.system.top_node]
+        sim.top_react[...] = self._xws.fnode[sim.system.top_node]
 
-    def snapshot(self):
-        snap = super().snapshot()
-        if hasattr(self, "xr"):
-            snap.explicit = tuple(a.copy() for a in (self.xr, self.xv, self.xang, self.xomg, self.xtens))
-        return snap
+    def snapshot(self, snap):
+        snap.explicit = tuple(a.copy() for a in (self.xr, self.xv, self.xang, self.xomg, self.xtens))
 
     def restore(self, snap):
-        super().restore(snap)
-        if hasattr(snap, "explicit") and hasattr(self, "xr"):
+        if hasattr(snap, "explicit"):
             for dst, src in zip((self.xr, self.xv, self.xang, self.xomg, self.xtens), snap.explicit):
                 dst[...] = src
+
+
+def ExplicitSimulator(scene, scheme: str = "rk2", axial_damping_ratio: float = 0.0, **overrides) -> Simulator:
+    """A :class:`~towenv.core.simulator.Simulator` whose ``solver.method`` is the explicit ``scheme``
+    ("euler", "rk2", "rk4") — shorthand for ``Simulator(scene, method=scheme, axial_damping_ratio=…)``."""
+    if scheme not in SCHEMES:
+        raise ValueError(f"scheme: must be one of {sorted(SCHEMES)} (got {scheme!r})")
+    if isinstance(axial_damping_ratio, bool) or not (axial_damping_ratio >= 0 and np.isfinite(axial_damping_ratio)):
+        raise ValueError(f"axial_damping_ratio: must be >= 0 (got {axial_damping_ratio!r})")
+    return Simulator(scene, **{**overrides, "solver.method": scheme, "solver.axial_damping_ratio": float(axial_damping_ratio)})

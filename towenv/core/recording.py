@@ -103,11 +103,13 @@ _stamp_dependencies(_record_chunk, K)
 
 def supports(sim, rec) -> bool:
     """True when :func:`advance_recorded` reproduces the per-record loop for ``sim`` and ``rec``: the Houbolt
-    ``Simulator`` (``_run``, ``advance_steps`` and ``_tow_points`` not overridden) with the fast recorder."""
+    scheme on a ``Simulator`` (``_run``, ``advance_steps`` and ``_tow_points`` not overridden) with the fast
+    recorder."""
+    from .schemes import HouboltScheme
     from .simulator import Simulator
     cls = type(sim)
-    return (bool(rec.fast) and sim.winch[K.W_MODE] == 0 and cls._run is Simulator._run
-            and cls.advance_steps is Simulator.advance_steps and cls._tow_points is Simulator._tow_points
+    return (bool(rec.fast) and sim.winch[K.W_MODE] == 0 and type(sim.scheme) is HouboltScheme
+            and cls._run is Simulator._run and cls.advance_steps is Simulator.advance_steps and cls._tow_points is Simulator._tow_points
             and cls._wave_arrays is Simulator._wave_arrays)
 
 

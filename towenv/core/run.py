@@ -14,26 +14,14 @@ from .simulator import Simulator
 
 def make_simulator(scene, **overrides) -> Simulator:
     """A simulator for ``scene`` using the time integration named by its ``solver.method``
-    (overridable: ``make_simulator(scene, method="rk2")``)."""
+    (overridable: ``make_simulator(scene, method="rk2")``): ``towenv.Simulator(scene, **overrides)`` with
+    every scene solver setting also accepted by its short name."""
     from .simulator import load
     from ..scene import Solver
     solver_keys = tuple(Solver.model_fields)          # the scene schema is the one list of solver settings
     sc = load(scene, {("solver." + k if k in solver_keys else k): v for k, v in overrides.items()}
               if overrides else None)
-    method = sc.solver.method
-    if method == "houbolt":
-        return Simulator(sc)
-    if method in ("euler", "rk2", "rk4"):
-        from .explicit import ExplicitSimulator
-        return ExplicitSimulator(sc, scheme=method, axial_damping_ratio=sc.solver.axial_damping_ratio)
-    if method in ("generalized_alpha", "newmark"):
-        from .alpha import GeneralizedAlphaSimulator
-        return GeneralizedAlphaSimulator(sc, method=method, rho_inf=sc.solver.rho_inf,
-                                         axial_damping_ratio=sc.solver.axial_damping_ratio)
-    if method == "quasi_static":
-        from .quasistatic import QuasiStaticSimulator
-        return QuasiStaticSimulator(sc)
-    raise ValueError(f"solver.method: must be one of houbolt, generalized_alpha, newmark, euler, rk2, rk4, quasi_static (got {method!r})")
+    return Simulator(sc)       # the scheme is the one solver.method names (towenv.core.schemes.make_scheme)
 
 
 def simulate(scene, duration: float, record_interval: float | None = None, progress: bool = False, *,

@@ -15,6 +15,7 @@ from . import kernels as K
 from .excitation import TowPointPath
 from .statics import quasi_static
 from .model import HouboltWork, SavedStep, TimeLevels, WaveField
+from .schemes import make_scheme
 from .system import System, build_system
 
 _CAUSES = {
@@ -139,12 +140,6 @@ class Simulator:
         dotted = {k: v for k, v in overrides.items() if k not in short}
         dotted.update({f"solver.{k}": v for k, v in short.items()})
         self.scene = load(scene, dotted)
-        method = _get(_get(self.scene, "solver"), "method", "houbolt")
-        if type(self) is Simulator and method != "houbolt":
-            from ..scene import SceneError
-            raise SceneError([("solver.method", f"{method!r}: towenv.Simulator is the Houbolt scheme; build the "
-                               f"simulator with towenv.make_simulator(scene), which uses the scheme "
-                               f"solver.method names (as towenv.simulate and `towenv simulate` do)")])
         self.system: System = build_system(self.scene)
         solver = _get(self.scene, "solver")
         self.settings = SolverSettings(**{k: _get(solver, k, getattr(SolverSettings, k))
@@ -168,7 +163,10 @@ class Simulator:
         self.cstate = np.zeros(K.COMP_STATE_SIZE)
         self._allocate()
         self._setup_actuators()
+        #: the time scheme solver.method names (towenv.core.schemes): it advances this simulator
+        self.scheme = make_scheme(self)
         self._initial_state()
+        self.scheme.start()
         self._initial = self.snapshot()
 
     def _check_reduced_models(self):
@@ -178,18 +176,18 @@ class Simulator:
         sc = self.scene
         if self.settings.newton_stop != "change":
             method = _get(_get(sc, "solver"), "method", "houbolt")
-            if method != "houbolt" or hasattr(self, "scheme"):
+            if method != "houbolt":
                 raise ValueError(f"solver.newton_stop: 'estimate' exists for the houbolt solver only (solver.method = "
-                                 f"{getattr(self, 'scheme', method)!r}); use 'change'")
+                                 f"{method!r}); use 'change'")
         reduced = [b.name for b in self.system.bodies if getattr(b, "rigid_index", -1) >= 0
                    and self.system.bp[b.rigid_index, BP_REDUCED_DOF] != 0.0]
         if not self.settings.planar and not reduced:
             return
         what = "solver.planar" if self.settings.planar else f"bodies {reduced!r}: dof = 'surge_heave_pitch'"
         method = _get(_get(sc, "solver"), "method", "houbolt")
-        if method != "houbolt" or hasattr(self, "scheme"):
+        if method != "houbolt":
             raise ValueError(f"{what}: the reduced models exist for the houbolt solver only (solver.method = "
-                             f"{getattr(self, 'scheme', method)!r})")
+                             f"{method!r})")
         if not self.settings.planar:
             return
 
@@ -434,10 +432,12 @@ class Simulator:
 
     def snapshot(self) -> Snapshot:
         winch = self.winch[K.W_MODE] > 0
-        return Snapshot(self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy(), self.top_react.copy(),
+        snap = Snapshot(self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy(), self.top_react.copy(),
                         self.step_count, self.cstate.copy(), self.wstate.copy(), self.comp.copy(), self.winch.copy(),
                         self.system if winch else None, self.system.l0.copy() if winch else None,
                         self.body_chart.copy())
+        self.scheme.snapshot(snap)
+        return snap
 
     def restore(self, snap: Snapshot) -> None:
         if snap.system is not None and snap.system is not self.system:
@@ -458,12 +458,14 @@ class Simulator:
         self.comp[...] = snap.comp
         self.winch[...] = snap.winch
         self.step_count = snap.step
+        self.scheme.restore(snap)
 
     def reset(self) -> None:
         """Back to the settled initial state at t = 0."""
         self.restore(self._initial)
         self.counters[:] = 0
         self.remesh_count = 0
+        self.scheme.reset()
 
     def kernel_data(self) -> KernelData:
         """The arrays the compiled kernel works on and the two hooks of ``advance_steps`` (:class:`KernelData`),
@@ -472,19 +474,7 @@ class Simulator:
                           self.comp, self.winch, self.wstate, self._wave_arrays(), self._remesh, self._divergence)
 
     def _run(self, tops, dt, t_start):
-        done = 0
-        settings = self.settings.array()
-        while done < len(tops):
-            st, k, el, md = K.advance(len(tops) - done, dt, tops[done:], *self._args, settings, self._state,
-                                      self._ws, self._saved, self.counters, self.comp, self.winch, self.wstate,
-                                      t_start + done * dt, self._wave_arrays())
-            if st == K.OK:
-                return
-            if st == K.NEED_REMESH:
-                done += k + 1
-                self._remesh()
-                continue
-            raise self._divergence(st, el, md, t_start + (done + k + 1) * dt)
+        self.scheme.run(tops, dt, t_start)
 
     def _divergence(self, st, el, md, t_fail) -> SimulationDivergence:
         """The SimulationDivergence for kernel status ``st`` (element ``el``, last max|δT| ``md``) at ``t_fail``."""
@@ -845,9 +835,10 @@ class Simulator:
     @property
     def stats(self):
         c = self.counters
-        return {"steps": int(c[L.N_STEPS]), "iterations": int(c[L.N_ITERATIONS]),
-                "max_iterations": int(c[L.N_MAX_ITERATIONS]), "step_cuts": int(c[L.N_STEP_CUTS]),
-                "recharts": int(c[L.N_RECHARTS]), "mean_iterations": float(c[L.N_ITERATIONS] / max(c[L.N_STEPS], 1))}
+        return self.scheme.stats({
+            "steps": int(c[L.N_STEPS]), "iterations": int(c[L.N_ITERATIONS]),
+            "max_iterations": int(c[L.N_MAX_ITERATIONS]), "step_cuts": int(c[L.N_STEP_CUTS]),
+            "recharts": int(c[L.N_RECHARTS]), "mean_iterations": float(c[L.N_ITERATIONS] / max(c[L.N_STEPS], 1))})
 
 
 def quaternion_from_rotation(R) -> np.ndarray:
