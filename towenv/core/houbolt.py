@@ -30,6 +30,14 @@ from .tension_solve import (_positions_from_tensions, assemble_tension_system, t
 def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
+    Phases (each marked ``# ---`` below): actuator lag and predictor; then per Newton iteration the loads at
+    the iterate (cable segments, node assembly, rigid bodies condensed onto their tow-point nodes), the
+    node-local solve of every free node, the Newton update of the tensions on the tree, the body-angle
+    update and the convergence test; then the end-stop contact check and the commit. The phases stay in one
+    compiled function on purpose: split into separate njit functions they measured 25–40 % slower per step
+    (two_part_tow_1, Δt 0.05 s: 25–28 µs against 20 µs; with numba's ``inline="always"`` no better, and
+    with explicit array arguments it does not compile) — see issue 16's closing note.
+
     On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
     solution lives in the work arrays), so the caller can retry with a smaller step.
     """

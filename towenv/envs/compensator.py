@@ -96,9 +96,7 @@ class CompensatorGainsEnv(TowEnv):
     @staticmethod
     def _to_gain(a, mp):
         lo, hi, blo, bhi = mp
-        if hi <= lo:
-            return min(max(lo, blo), bhi)
-        return min(max(lo * (hi / lo) ** (0.5 * (a + 1.0)), blo), bhi)
+        return log_gain(float(a), float(lo), float(hi), float(blo), float(bhi))
 
     @staticmethod
     def _to_action(g, mp):
@@ -148,6 +146,17 @@ class CompensatorGainsEnv(TowEnv):
 
 
 @njit(cache=True)
+def log_gain(a, lo, hi, blo, bhi):
+    """The action → gain map (one formula for :meth:`CompensatorGainsEnv.gains` and the batched
+    :func:`_log_gains`): log-linear from ``lo`` at a = −1 to ``hi`` at a = +1, clipped to [blo, bhi]."""
+    if hi <= lo:
+        g = lo
+    else:
+        g = lo * (hi / lo) ** (0.5 * (a + 1.0))
+    return min(max(g, blo), bhi)
+
+
+@njit(cache=True)
 def _log_gains(A, rows, amap, U):
     """Clean actions ``A[rows]`` in place (NaN → 0, clip to [−1, 1]) and map them to gains (the
     arithmetic of :meth:`CompensatorGainsEnv.gains`). Returns the number of action entries cleaned."""
@@ -162,13 +171,5 @@ def _log_gains(A, rows, amap, U):
                     a = 0.0
                 a = min(max(a, -1.0), 1.0)
             A[b, d] = a
-            lo = amap[b, 4 * d]
-            hi = amap[b, 4 * d + 1]
-            blo = amap[b, 4 * d + 2]
-            bhi = amap[b, 4 * d + 3]
-            if hi <= lo:
-                g = lo
-            else:
-                g = lo * (hi / lo) ** (0.5 * (a + 1.0))
-            U[b, d] = min(max(g, blo), bhi)
+            U[b, d] = log_gain(a, amap[b, 4 * d], amap[b, 4 * d + 1], amap[b, 4 * d + 2], amap[b, 4 * d + 3])
     return n_bad
