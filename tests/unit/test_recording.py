@@ -186,3 +186,23 @@ def test_cache_index_is_stamped_with_the_kernels_source():
         pytest.skip("numba caching internals not available")
     digest = hashlib.sha256(Path(K.__file__).read_bytes()).hexdigest()
     assert isinstance(cf._source_stamp, tuple) and cf._source_stamp[1] == digest
+
+
+def test_warm_up_compiles_before_the_clock_without_advancing():
+    """Issue 15 (first use): simulate() compiles or loads the kernels before its clock and progress bar start
+    (the summary's real-time factor then measures the simulation only); the warm-up calls record and advance
+    nothing, so results are unchanged."""
+    sim = towenv.Simulator("two_part_coastal_ss4")
+    rec = Recorder(sim, 20)
+    rec.record()
+    before = [a.copy() for a in (sim.hist_r, sim.hist_ang, sim.tens_hist, sim.top_react, sim.counters)]
+    recording.warm_up(sim, rec, 5)
+    sim.scheme.warm_up()
+    assert recording._record_chunk.signatures and K.advance.signatures
+    after = (sim.hist_r, sim.hist_ang, sim.tens_hist, sim.top_react, sim.counters)
+    assert all(np.array_equal(a, b) for a, b in zip(before, after)) and rec.n == 1 and sim.step_count == 0
+    a = simulate("two_part_coastal_ss4", duration=3.0)
+    b = simulate("two_part_coastal_ss4", duration=3.0, _compiled=False)
+    np.testing.assert_array_equal(a.top_tension, b.top_tension)
+    np.testing.assert_array_equal(a.tow_point, b.tow_point)
+    assert a.meta["real_time_factor"] > 0

@@ -113,6 +113,19 @@ def supports(sim, rec) -> bool:
             and cls._wave_arrays is Simulator._wave_arrays)
 
 
+def warm_up(sim, rec, every: int) -> None:
+    """Compile (or load from numba's cache) the recording loop for ``sim``'s and ``rec``'s argument types with
+    a call that records nothing and leaves every array untouched — so that a caller can keep compilation out
+    of its timing and its progress display."""
+    kd = sim.kernel_data()
+    s = sim.system
+    cnodes = np.array([s.comp_node, s.top_node], np.int64)
+    src = (sim.hist_r, sim.hist_ang, sim.body_chart, sim.tens_hist, sim.top_react, sim.comp)
+    _record_chunk(0, int(every), sim.settings.dt, np.empty((0, 3)), np.empty(0), kd.head, kd.wave, src, rec.bnodes,
+                  cnodes, rec.n, rec.R, rec.RB, rec.A, rec.C, rec.T, rec.top_force, np.zeros((0, 3, 2)),
+                  np.zeros((0, 2)))
+
+
 def advance_recorded(sim, rec, n_records: int, every: int, on_chunk=None, max_chunk_steps: int | None = None):
     """Advance ``sim`` by ``n_records * every`` steps, recording into ``rec`` after every ``every`` steps —
     what ``for _ in range(n_records): sim.advance_steps(every); rec.record()`` does, bit for bit, in compiled

@@ -44,6 +44,10 @@ class TimeScheme:
     def run(self, tops, dt: float, t_start: float) -> None:
         raise NotImplementedError
 
+    def warm_up(self) -> None:
+        """Compile (or load from numba's cache) what ``run`` calls, without advancing: callers keep
+        compilation out of their timings and progress displays."""
+
     def reset(self) -> None:
         pass
 
@@ -82,6 +86,11 @@ class HouboltScheme(TimeScheme):
                 sim._remesh()
                 continue
             raise sim._divergence(st, el, md, t_start + (done + k + 1) * dt)
+
+    def warm_up(self):
+        import numpy as np
+        kd = self.sim.kernel_data()
+        K.advance(0, self.sim.settings.dt, np.empty((0, 3)), *kd.head, self.sim.t, kd.wave)
 
 
 def make_scheme(sim) -> TimeScheme:

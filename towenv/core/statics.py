@@ -15,7 +15,6 @@ import math
 
 import numpy as np
 from .layout import BP_AFT_TOW_POINT
-from scipy.optimize import brentq
 
 from .cable_loads import morison_drag
 from .kernels import FREE, PRESCRIBED_AFT, body_loads, current_at, rotation_matrix
@@ -61,6 +60,7 @@ def body_static_load(sys: System, ib: int, U, z, tail_force=None, pitch=None):
         return ff, mm, lam.copy()
 
     if pitch is None:
+        from scipy.optimize import brentq          # imported on first use: `import towenv` stays light
         grid = np.radians(np.linspace(-70, 70, 141))
         my = np.array([loads(a)[1][1] for a in grid])
         roots = []
