@@ -9,8 +9,9 @@ import math
 
 
 from .jit import njit
-from .layout import (BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG, BP_INERTIA,
-                     BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_ROT_DAMPING, BP_VOLUME)
+from .layout import (BK_DAMPING, BK_STIFFNESS, BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB,
+                     BP_CG, BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_ROT_DAMPING,
+                     BP_VOLUME)
 from .rotations import _chart_rotation, _cross, _inv3
 
 
@@ -273,8 +274,8 @@ def _rotational_stiffness(b, ang, chart, vnode, w, bp, btab_n, btab, rho, g, cur
     eps_w = 1e-4
     for i in range(3):
         if reduced and i != 1:
-            bkc[b, i] = 0.0
-            bkc[b, 3 + i] = 0.0
+            bkc[b, BK_STIFFNESS + i] = 0.0
+            bkc[b, BK_DAMPING + i] = 0.0
             continue
         for k in range(3):
             ang2[k] = ang[k]
@@ -285,14 +286,14 @@ def _rotational_stiffness(b, ang, chart, vnode, w, bp, btab_n, btab, rho, g, cur
             vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
         body_loads(b, lam, vb, w, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
         kk = -(m[i] - m0[i]) / eps_a
-        bkc[b, i] = kk if kk > 0.0 else 0.0
+        bkc[b, BK_STIFFNESS + i] = kk if kk > 0.0 else 0.0
         _chart_rotation(ang[0], ang[1], ang[2], chart, b, lam)
         for k in range(3):
             vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
         w2[i] += eps_w
         body_loads(b, lam, vb, w2, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
         cc = -(m[i] - m0[i]) / eps_w
-        bkc[b, 3 + i] = cc if cc > 0.0 else 0.0
+        bkc[b, BK_DAMPING + i] = cc if cc > 0.0 else 0.0
 
 
 @njit(cache=True)
@@ -342,7 +343,8 @@ def aft_segment_stiffness(s, m_tail, stretched, tens, l0, ea, hdt2):
 @njit(cache=True)
 def aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tang, stretched, tens, l0, ea, hdt2,
                              m_tail, bkc):
-    """Adds to ``bkc[b, 0:3]`` the restoring stiffness of the tail's pull about the body's axes
+    """Adds to ``bkc[b, BK_STIFFNESS:BK_STIFFNESS + 3]`` the restoring stiffness of the tail's pull about the
+    body's axes
     (e_i = body axis i): for a rotation δθ about e the aft point moves by u = e × d (d = aft point − body
     node) and K = T (d·t − (e·d)(e·t)) + k_ax (t·u)² + (T/ℓ)(|u|² − (t·u)²), clipped at 0 (t: direction
     of the pull). Relaxation only (see :func:`aft_segment_stiffness`)."""
@@ -371,4 +373,4 @@ def aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tan
                              - (e0 * d0 + e1 * d1 + e2 * d2) * (e0 * t0 + e1 * t1 + e2 * t2))
                   + kax * tu * tu + kgeo * (u0 * u0 + u1 * u1 + u2 * u2 - tu * tu))
             if kk > 0.0:
-                bkc[b, i] += kk
+                bkc[b, BK_STIFFNESS + i] += kk

@@ -8,12 +8,12 @@ import math
 import numpy as np
 
 from .jit import njit
-from .layout import (BP_CB, BP_REDUCED_DOF, BP_TAIL_MASS, COMPENSATOR, COMP_FORCE, COMP_PASSIVE, COMP_POSITION,
-                     CS_ACT, CS_CONTACT, CS_HITS, CS_PEN, C_CMD, C_MODE, C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN,
-                     C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON, FAIL_STRETCH, FREE, NEED_REMESH,
-                     N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS, N_STEP_CUTS, OK, PITCH_LIMIT,
-                     RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED, S_MAX_ITERATIONS,
-                     S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH,
+from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_CB, BP_REDUCED_DOF, BP_TAIL_MASS, COMPENSATOR,
+                     COMP_FORCE, COMP_PASSIVE, COMP_POSITION, CS_ACT, CS_CONTACT, CS_HITS, CS_PEN, C_CMD, C_MODE,
+                     C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
+                     FAIL_STRETCH, FREE, NEED_REMESH, N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS,
+                     N_STEP_CUTS, OK, PITCH_LIMIT, RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED,
+                     S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH,
                      S_RELATIVE_TOLERANCE, S_TOLERANCE, WS_LEN, WS_PAID, WS_V, W_LNOM, W_MODE, W_SEG)
 from .actuators import _compensator_node, _end_stop_force, _winch_speed
 from .body_dynamics import (_condense, _rotational_stiffness, _translational_damping, aft_rotational_stiffness,
@@ -153,7 +153,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                              tmp33b, bX[b], by[b], mnode, fnode, reduced):
                 return FAIL_NAN, it, -1, 0.0
             for i in range(3):
-                bkc[b, 6 + i] = arr[i, i]
+                bkc[b, BK_INERTIA + i] = arr[i, i]
             # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
             for i in range(3):
                 for j in range(3):
@@ -310,7 +310,8 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                 na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
                 # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
                 # of the fixed-point update that leaves the converged solution unchanged
-                na = angs[b, i] + (na - angs[b, i]) / (1.0 + (hdt2 * bkc[b, i] + c11 * bkc[b, 3 + i]) / bkc[b, 6 + i])
+                na = angs[b, i] + (na - angs[b, i]) / (
+                    1.0 + (hdt2 * bkc[b, BK_STIFFNESS + i] + c11 * bkc[b, BK_DAMPING + i]) / bkc[b, BK_INERTIA + i])
                 dd = abs(na - angs[b, i])
                 if not (dd <= dang_max):
                     dang_max = dd

@@ -54,6 +54,14 @@ COUNTERS_SIZE = 5
 
 
 # ------------------------------------------------------------------------------------------------------
+# per-body diagonal estimates the Newton iteration relaxes the body-angle update with (HouboltWork.bkc, (nb, 9))
+# ------------------------------------------------------------------------------------------------------
+BK_STIFFNESS = 0            # 0-2: rotational stiffness about the body axes
+BK_DAMPING = 3              # 3-5: rotational damping
+BK_INERTIA = 6              # 6-8: rotational inertia (diagonal of the condensed A_rr)
+BK_SIZE = 9
+
+# ------------------------------------------------------------------------------------------------------
 # node kinds, status codes of the step kernels, actuator parameter/state layouts
 # ------------------------------------------------------------------------------------------------------
 # status codes returned by the step kernels

@@ -24,6 +24,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .layout import BK_SIZE
+
 MAX_SEGS_PER_NODE = 8          # segments that may meet at one node (junctions)
 
 
@@ -142,7 +144,7 @@ class HouboltWork(NamedTuple):
     mb: np.ndarray              # (3,) body moment
     bdiag: np.ndarray           # (1,) body damping diagonal
     react: np.ndarray           # (3,) node reaction
-    bkc: np.ndarray             # (nb, 9) body rotational stiffness, damping, inertia diagonals
+    bkc: np.ndarray             # (nb, BK_SIZE) body rotational stiffness, damping, inertia diagonals (layout.BK_*)
     bdmat: np.ndarray           # (nb, 3, 3) body translational damping
     scr: np.ndarray             # (6, 3) scratch
     flow: np.ndarray            # (nn, 3) wave orbital velocity at the nodes
@@ -156,7 +158,7 @@ class HouboltWork(NamedTuple):
             z(ns), z((nn, mk, mk)), z(ns), z(ns), z(ns), z(ns),
             z((nb, 3, 3)), z((nb, 3)), z((nb, 3, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)),
             z(3), z(3), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)),
-            z(3), z(3), z(3), z(1), z(3), z((nb1, 9)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)))
+            z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)))
 
 
 class ExplicitWork(NamedTuple):
