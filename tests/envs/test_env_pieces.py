@@ -386,3 +386,28 @@ def test_default_renderer_is_the_side_viewer():
 def test_bad_renderer_raises_config_error(bad):
     with pytest.raises(ConfigError, match="renderer"):
         CompensatorGainsEnv(render_mode="rgb_array", renderer=bad)
+
+
+def test_reward_dict_form_is_the_compiled_form():
+    """Issue 16 ("same facts in several places"): HeavePitchReward.__call__ (one measurement dict) computes
+    with the compiled arithmetic of .batch — equal bit for bit, NaN guard included, for both rewards."""
+    from towenv.envs.measurements import COL, MEAS_COLUMNS
+    from towenv.envs.pieces import HeaveOnlyReward, HeavePitchReward
+    rng = np.random.default_rng(5)
+    keys = ("fish_heave_dev", "fish_pitch_dev", "fish_heave_rate", "fish_pitch_rate", "end_stop_hits",
+            "min_tension", "tension_ratio", "effort")
+    for rew in (HeavePitchReward(), HeaveOnlyReward(), HeavePitchReward({"slack": 3.0}, slack_tension=50.0)):
+        for trial in range(40):
+            M = np.zeros((3, len(MEAS_COLUMNS)))
+            m = {k: float(rng.normal() * 10.0 ** rng.integers(-3, 3)) for k in keys}
+            m["end_stop_hits"] = float(rng.integers(0, 3))
+            if trial == 7:
+                m["fish_pitch_dev"] = float("nan")
+            for k in keys:
+                M[1, COL[k]] = m[k]
+            m["fish_heave"], m["fish_pitch"] = 0.0, 0.0
+            a, ap = rng.uniform(-1, 1, (3, 2)), rng.uniform(-1, 1, (3, 2))
+            R, C = rew.batch(M, a, ap, np.array([1]))
+            r, c = rew(m, a[1], ap[1])
+            assert np.isfinite(r) and r == R[0]
+            assert list(c) == list(rew.COMPONENTS) and [c[k] for k in rew.COMPONENTS] == list(C[0])

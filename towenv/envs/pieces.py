@@ -442,31 +442,24 @@ class HeavePitchReward(RewardFn):
         self.over_tension_fraction = float(over_tension_fraction)
 
     def __call__(self, m, action, prev_action):
-        w = self.weights
-        hr = m["fish_heave_rate"] / HEAVE_RATE_LIMIT
-        pr = m["fish_pitch_rate"] / PITCH_RATE_LIMIT
-        f = self.over_tension_fraction
-        da = np.subtract(action, prev_action)
-        da2 = float(da @ da) / max(da.size, 1)
+        """Reward and components of one measurement dict ``m`` (:data:`MEASUREMENTS`; ``fish_heave_dev`` /
+        ``fish_pitch_dev`` fall back to ``fish_heave`` / ``fish_pitch``, ``end_stop_hits`` and ``effort`` to 0,
+        an ``effort`` array counts by its mean square) — computed by the same compiled arithmetic as
+        :meth:`batch`, the one definition of the cost."""
+        row = np.zeros((1, len(MEAS_COLUMNS)))
+        row[0, _C_HEAVE] = m.get("fish_heave_dev", m["fish_heave"])
+        row[0, _C_PITCH] = m.get("fish_pitch_dev", m["fish_pitch"])
+        row[0, _C_HR] = m["fish_heave_rate"]
+        row[0, _C_PR] = m["fish_pitch_rate"]
+        row[0, _C_HITS] = float(m.get("end_stop_hits", 0))
+        row[0, _C_MINT] = m["min_tension"]
+        row[0, _C_RATIO] = m["tension_ratio"]
         eff = m.get("effort", 0.0)
-        eff2 = float(eff) ** 2 if isinstance(eff, (int, float)) else float(np.mean(np.square(eff)))
-        c = {
-            "heave": w["heave"] * m.get("fish_heave_dev", m["fish_heave"]) ** 2,
-            "pitch": w["pitch"] * m.get("fish_pitch_dev", m["fish_pitch"]) ** 2,
-            "heave_rate": w["heave_rate"] * hr * hr,
-            "pitch_rate": w["pitch_rate"] * pr * pr,
-            "rate_over": w["rate_over"] * (max(0.0, abs(hr) - 1.0) ** 2 + max(0.0, abs(pr) - 1.0) ** 2),
-            "end_stop": w["end_stop"] * float(m.get("end_stop_hits", 0)),
-            "slack": w["slack"] * float(m["min_tension"] <= self.slack_tension),
-            "over_tension": w["over_tension"] * max(0.0, (m["tension_ratio"] - f) / (1.0 - f)),
-            "effort": w["effort"] * eff2,
-            "action_rate": w["action_rate"] * da2,
-        }
-        total = sum(c.values())
-        if not math.isfinite(total):            # never hand NaN to a learner
-            c = {k: (v if math.isfinite(v) else 1e6) for k, v in c.items()}
-            total = sum(c.values())
-        return -float(total), c
+        row[0, _C_EFF] = float(eff) if np.ndim(eff) == 0 else math.sqrt(float(np.mean(np.square(eff))))
+        a = np.atleast_1d(np.asarray(action, float))[None, :]
+        ap = np.atleast_1d(np.asarray(prev_action, float))[None, :]
+        R, C = self.batch(row, a, ap, np.zeros(1, np.int64))
+        return float(R[0]), dict(zip(self.COMPONENTS, (float(v) for v in C[0])))
 
     def terminal_cost(self, steps_left):
         return self.weights["terminal"] * (int(steps_left) + 1)
