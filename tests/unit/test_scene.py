@@ -1,4 +1,4 @@
-"""Tests of the scene format (towenv/scene.py, docs/scene-format.md) and the embedded scenes."""
+"""Tests of the scene format (towenv/scene/, docs/scene-format.md) and the embedded scenes."""
 import copy
 import math
 import tomllib

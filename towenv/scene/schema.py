@@ -1,65 +1,24 @@
-"""Scene description: validated, immutable data for a towed system (``docs/scene-format.md``).
-
-A scene is a TOML file, a plain dict, or the name of a scene shipped in ``towenv/scenes/``::
-
-    >>> from towenv.scene import load_scene, list_scenes
-    >>> sc = load_scene("two_part_tow_1")            # embedded scene (the project default)
-    >>> sc.line("primary").length
-    85.0
-    >>> sc.span_segments("primary")                  # segments per span, top end first
-    [6, 2]
-    >>> fast = sc.with_overrides({"vessel.speed": 4.0, "solver.dt": 0.01})
-
-Every validation problem raises one :class:`SceneError` (a ``ValueError``) whose message lists each
-offending field by its dotted path, what is allowed and the value given, e.g.
-``lines[0].length: must be > 0 m (got -5.0)``. No pydantic or numpy exception escapes
-:func:`load_scene`.
-
-All models are frozen; derive variants with :meth:`Scene.with_overrides`.
+"""The scene schema (pydantic v2 models, all frozen): water, current, vessel and its manoeuvres/excitation,
+lines, bodies, solver, sea, compensator, winch, and the :class:`Scene` that checks the topology. The one source
+of every default the simulator uses (read through :func:`scene_field`).
 """
 import copy
 import csv
 import math
-import numbers
-import re
-import tomllib
 from collections.abc import Mapping
-from os import PathLike
 from pathlib import Path
 from typing import Annotated, Any, Literal, NamedTuple, Union
 
-from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationError,
-                      ValidationInfo, model_validator)
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationInfo, model_validator
 from pydantic.functional_serializers import PlainSerializer
 from pydantic.functional_validators import PlainValidator
-from pydantic_core import PydanticCustomError
 
-__all__ = [
-    "scene_field",
-    "SceneError", "Scene", "Water", "Current", "Vessel", "TurnManoeuvre", "SpeedChangeManoeuvre",
-    "SinusoidExcitation", "TimeSeriesExcitation", "Ramp", "Line", "JunctionAttachment", "BodyAttachment",
-    "PointBody", "RigidBody", "CoefficientTable", "Solver", "ManoeuvreWindow",
-    "load_scene", "list_scenes", "scene_path", "DEFAULT_SCENE", "SCENES_DIR", "SCENE_DATA_DIR",
-    "MAX_SEGMENTS",
-]
-
-SCENES_DIR = Path(__file__).resolve().parent / "scenes"
-SCENE_DATA_DIR = SCENES_DIR / "data"
-DEFAULT_SCENE = "two_part_tow_1"
-# Segment count of one line and of the whole scene. Why 5000: the build costs ~0.7 ms per segment (3.5 s at
-# 5000, 17.5 s at 20 000, measured on the two-part tow), and segments that short need a tiny Δt for the
-# tension iteration to converge (the two-part tow's 20 m secondary diverges from ~150 segments at Δt = 0.02 s,
-# transverse Courant number c_T·Δt/l ≈ 2.5; the divergence message names the number) — 5000 is far beyond
-# any embedded scene (≤ 100) and the fidelity study.
-MAX_SEGMENTS = 5000
-_SEGMENTS_WHY = ("longer chains build slowly (~0.7 ms per segment) and segments that short need a tiny Δt "
-                 "for the tension iteration to converge (transverse Courant number c_T·Δt/l, model.md 5.9)")
-_INTERNAL = "internal error while validating the scene"
+from .errors import SceneError, _problems, _short
+from .fields import Int, MAX_SEGMENTS, Num, Vec3, _SEGMENTS_WHY, _choice, _validate_name, _validate_segments, _validate_text
+from .overrides import _clean, _set_path
+from .toml_writer import dumps_toml
 
 
-# =====================================================================================================
-# Error type and formatting
-# =====================================================================================================
 def scene_field(obj, name: str, default=None):
     """``obj.name`` of a scene model (``obj[name]`` of a mapping; ``default`` for ``None``). The one accessor the
     core uses to read a validated scene: its defaults are the schema's, ``default`` only stands for a field
@@ -71,335 +30,10 @@ def scene_field(obj, name: str, default=None):
     return getattr(obj, name, default)
 
 
-class SceneError(ValueError):
-    """Invalid scene. ``problems`` is a list of ``(dotted_path, message)``; ``str(err)`` lists them all."""
-
-    def __init__(self, problems, source: str | None = None):
-        if isinstance(problems, str):
-            problems = [("", problems)]
-        self.problems: list[tuple[str, str]] = list(problems)
-        self.source = source
-        lines = [f"{p}: {m}" if p else m for p, m in self.problems]
-        prefix = f"{source}: " if source else ""
-        if len(lines) == 1:
-            msg = prefix + lines[0]
-        else:
-            msg = f"{prefix}{len(lines)} problems in scene:\n" + "\n".join("  " + x for x in lines)
-        super().__init__(msg)
-
-    @classmethod
-    def from_validation_error(cls, err: ValidationError, source: str | None = None) -> "SceneError":
-        problems: list[tuple[str, str]] = []
-        errors = err.errors(include_url=False)
-        locs = [tuple(e.get("loc", ())) for e in errors]
-        for e in errors:
-            loc = tuple(e.get("loc", ()))
-            if e.get("type") == "too_short" and any(len(o) > len(loc) and o[:len(loc)] == loc for o in locs):
-                continue                   # "0 items after validation": its items already reported
-            for item in _convert_error(e):
-                if item not in problems:
-                    problems.append(item)
-        if not problems:
-            problems = [("", "invalid scene")]
-        return cls(problems, source)
-
-
-def _short(v: Any, limit: int = 80) -> str:
-    try:
-        if isinstance(v, float):
-            s = repr(v)
-        elif isinstance(v, (list, tuple)):
-            s = "[" + ", ".join(_short(x, 20) for x in v[:8]) + (", ..." if len(v) > 8 else "") + "]"
-        else:
-            s = repr(v)
-    except Exception:  # pragma: no cover - exotic objects with broken repr
-        s = f"<{type(v).__name__}>"
-    return s if len(s) <= limit else s[: limit - 3] + "..."
-
-
-def _join(base: str, part: Any) -> str:
-    if isinstance(part, int) and not isinstance(part, bool):
-        return f"{base}[{part}]"
-    part = str(part)
-    if not part:
-        return base
-    if part.startswith("["):
-        return base + part
-    return f"{base}.{part}" if base else part
-
-
-def _loc_path(loc) -> str:
-    path = ""
-    for p in loc:
-        if isinstance(p, str) and p.startswith("@"):
-            continue                       # discriminated-union tag, not a field
-        path = _join(path, p)
-    return path
-
-
-# union error type -> (key naming the variant, allowed values)
-_UNION_ERRORS = {
-    "bad_manoeuvre": ("type", ("turn", "speed_change")),
-    "bad_excitation": ("type", ("sinusoid", "time_series")),
-    "bad_body": ("kind", ("fish", "depressor", "ball", "clump")),
-}
-
-
-def _convert_error(e: dict) -> list[tuple[str, str]]:
-    loc = tuple(e.get("loc", ()))
-    typ = e.get("type", "")
-    ctx = e.get("ctx") or {}
-    inp = e.get("input")
-    path = _loc_path(loc)
-    got = f" (got {_short(inp)})"
-    if typ == "scene_problems":
-        return [(_join(path, sub) if sub else path, msg) for sub, msg in ctx.get("problems", [])]
-    if typ == "scene_value":
-        return [(path, str(ctx.get("msg", "invalid value")) + got)]
-    if typ in _UNION_ERRORS:
-        key, allowed = _UNION_ERRORS[typ]
-        choices = " or ".join(f'"{a}"' for a in allowed)
-        if isinstance(inp, Mapping):
-            if key in inp:
-                return [(_join(path, key), f"must be {choices} (got {_short(inp[key])})")]
-            return [(_join(path, key), f"required field missing; must be {choices}")]
-        return [(path, f'must be a table with {key} = {choices}{got}')]
-    if typ == "bad_top":
-        return [(path, 'must be "vessel", {line = "<name>", distance = <m>} or {body = "<name>"}' + got)]
-    if typ == "bad_bottom":
-        return [(path, 'must be "free" or {body = "<name>"}' + got)]
-    if typ == "missing":
-        return [(path, "required field missing")]
-    if typ == "extra_forbidden":
-        allowed = _allowed_fields(loc[:-1])
-        hint = f" (allowed: {', '.join(allowed)})" if allowed else ""
-        return [(path, f"unknown field{hint}")]
-    if typ in ("model_type", "model_attributes_type", "dict_type"):
-        return [(path, "must be a table" + got)]
-    if typ in ("tuple_type", "list_type", "iterable_type"):
-        return [(path, "must be a list" + got)]
-    if typ == "too_short":
-        n = ctx.get("min_length", 1)
-        return [(path, f"must have at least {n} entr{'y' if n == 1 else 'ies'}" + got)]
-    if typ == "string_type":
-        return [(path, "must be a string" + got)]
-    msg = str(e.get("msg", "invalid value"))
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
-    if msg.startswith("Input should be "):
-        msg = "must be " + msg[len("Input should be "):]
-    return [(path, msg + got)]
-
-
-def _model_classes(ann) -> list[type]:
-    """BaseModel subclasses mentioned in a type annotation."""
-    out: list[type] = []
-    if isinstance(ann, type) and issubclass(ann, BaseModel):
-        return [ann]
-    for a in getattr(ann, "__args__", ()) or ():
-        out += _model_classes(a)
-    origin = getattr(ann, "__origin__", None)
-    if origin is not None and origin is not ann:
-        out += [c for c in _model_classes(origin) if c not in out]
-    return out
-
-
-def _allowed_fields(loc) -> list[str]:
-    """Field names of the model at ``loc`` (used to list allowed names for an unknown field)."""
-    try:
-        cls: type | None = Scene
-        for p in loc:
-            if isinstance(p, int):
-                continue
-            if isinstance(p, str) and p.startswith("@"):
-                cls = _TAG_CLASSES.get(p)
-                continue
-            if cls is None or p not in cls.model_fields:
-                return []
-            cands = _model_classes(cls.model_fields[p].annotation)
-            cls = cands[0] if len(cands) == 1 else None
-        return list(cls.model_fields) if cls is not None else []
-    except Exception:  # pragma: no cover - defensive: never fail while reporting an error
-        return []
-
-
-def _problems(*items: tuple[str, str]):
-    """Raise a validation error carrying several ``(sub_path, message)`` problems."""
-    items = [(str(p), str(m)) for p, m in items]
-    raise PydanticCustomError("scene_problems", "{summary}",
-                              {"summary": "; ".join(f"{p}: {m}" for p, m in items), "problems": items})
-
-
-def _value_error(msg: str):
-    raise PydanticCustomError("scene_value", "{msg}", {"msg": msg})
-
-
-# =====================================================================================================
-# Constrained value types (all reject bool, strings, NaN and infinity)
-# =====================================================================================================
-def _fmt(x: float) -> str:
-    return f"{x:g}"
-
-
-def _range_text(gt=None, ge=None, lt=None, le=None, unit="") -> str:
-    lo = gt if gt is not None else ge
-    hi = lt if lt is not None else le
-    if lo is not None and hi is not None:
-        s = f"in {'(' if gt is not None else '['}{_fmt(lo)}, {_fmt(hi)}{')' if lt is not None else ']'}"
-    elif lo is not None:
-        s = f"{'>' if gt is not None else '>='} {_fmt(lo)}"
-    elif hi is not None:
-        s = f"{'<' if lt is not None else '<='} {_fmt(hi)}"
-    else:
-        s = ""
-    if unit:
-        s = f"{s} {unit}" if s else f"({unit})"
-    return s
-
-
-def _is_number(v) -> bool:
-    """A real number (int, float, numpy scalar), not a bool."""
-    return isinstance(v, numbers.Real) and not isinstance(v, bool)
-
-
-def _is_integer(v) -> bool:
-    return isinstance(v, numbers.Integral) and not isinstance(v, bool)
-
-
-def _to_float(v, what: str) -> float:
-    if not _is_number(v):
-        _value_error(f"must be a number{(' ' + what) if what else ''}")
-    try:
-        f = float(v)
-    except (OverflowError, ValueError, TypeError):
-        _value_error(f"must be a finite number{(' ' + what) if what else ''}")
-    if not math.isfinite(f):
-        _value_error(f"must be a finite number{(' ' + what) if what else ''}")
-    return f
-
-
-def _in_range(f, gt, ge, lt, le) -> bool:
-    return not ((gt is not None and not f > gt) or (ge is not None and not f >= ge)
-                or (lt is not None and not f < lt) or (le is not None and not f <= le))
-
-
-def Num(*, gt=None, ge=None, lt=None, le=None, unit="", nonzero=False):
-    """A finite float with optional bounds; the error message states the allowed range and unit."""
-    rng = _range_text(gt, ge, lt, le, unit)
-
-    def validate(v):
-        f = _to_float(v, rng)
-        if not _in_range(f, gt, ge, lt, le):
-            _value_error(f"must be {rng}")
-        if nonzero and f == 0.0:
-            _value_error(f"must be non-zero{(' ' + unit) if unit else ''}")
-        return f
-
-    return Annotated[float, PlainValidator(validate)]
-
-
-def Int(*, ge=None, le=None):
-    """An integer (bools and floats are rejected) with optional bounds."""
-    msg = f"must be an integer {_range_text(ge=ge, le=le)}".rstrip()
-
-    def validate(v):
-        if not _is_integer(v):
-            _value_error(msg)
-        i = int(v)
-        if (ge is not None and i < ge) or (le is not None and i > le):
-            _value_error(msg)
-        return i
-
-    return Annotated[int, PlainValidator(validate)]
-
-
-def Vec3(*, gt=None, ge=None, lt=None, le=None, abs_le=None, unit="m"):
-    """Three finite floats ``[x, y, z]`` (stored as a tuple)."""
-    if abs_le is not None:
-        rng = f"with |component| <= {_fmt(abs_le)}{(' ' + unit) if unit else ''}"
-    else:
-        r = _range_text(gt, ge, lt, le, "")
-        rng = " ".join(x for x in ((f"each {r}" if r else ""), (f"({unit})" if unit else "")) if x)
-    what = f"must be a list of 3 numbers [x, y, z]{(' ' + rng) if rng else ''}"
-
-    def validate(v):
-        if isinstance(v, (str, bytes, Mapping)) or not hasattr(v, "__len__") or not hasattr(v, "__iter__"):
-            _value_error(what)
-        try:
-            items = list(v)
-        except Exception:
-            _value_error(what)
-        if len(items) != 3 or not all(_is_number(x) for x in items):
-            _value_error(what)
-        out = []
-        for x in items:
-            try:
-                f = float(x)
-            except (OverflowError, ValueError, TypeError):
-                _value_error(what)
-            if not math.isfinite(f):
-                _value_error(what)
-            if abs_le is not None and abs(f) > abs_le:
-                _value_error(what)
-            if not _in_range(f, gt, ge, lt, le):
-                _value_error(what)
-            out.append(f)
-        return tuple(out)
-
-    return Annotated[tuple[float, float, float], PlainValidator(validate),
-                     PlainSerializer(lambda v: [float(x) for x in v], return_type=list)]
-
-
-def _validate_name(v):
-    if not isinstance(v, str) or not v.strip():
-        _value_error("must be a non-empty string")
-    bad = sorted({repr(c) for c in v if ord(c) < 32 or ord(c) == 127 or c == ","})
-    if bad:
-        # control characters (NUL, newline, tab …) and commas would break the CSV header, the Markdown
-        # summary and file names; any other character round-trips through Result.save/load
-        _value_error(f"must not contain control characters or commas (found {', '.join(bad)})")
-    return v
-
-
-def _validate_text(v):
-    if not isinstance(v, str):
-        _value_error("must be a string")
-    return v
-
-
 Name = Annotated[str, PlainValidator(_validate_name)]
+
+
 Text = Annotated[str, PlainValidator(_validate_text)]
-
-
-def _choice(*allowed: str):
-    txt = " or ".join(f'"{a}"' for a in allowed)
-
-    def validate(v):
-        if not isinstance(v, str) or v not in allowed:
-            _value_error(f"must be {txt}")
-        return v
-
-    return Annotated[str, PlainValidator(validate)]
-
-
-def _validate_segments(v):
-    msg = (f"must be an integer in [1, {MAX_SEGMENTS}] or a list of such integers, one per span (top end first), "
-           f"{MAX_SEGMENTS} in all at most: {_SEGMENTS_WHY}")
-
-    def one(x):
-        if not _is_integer(x) or not 1 <= int(x) <= MAX_SEGMENTS:
-            _value_error(msg)
-        return int(x)
-
-    if isinstance(v, (list, tuple)):
-        if not v:
-            _value_error(msg)
-        out = tuple(one(x) for x in v)
-        if sum(out) > MAX_SEGMENTS:
-            _value_error(msg)
-        return out
-    return one(v)
 
 
 Segments = Annotated[Union[int, tuple[int, ...]], PlainValidator(_validate_segments),
@@ -410,9 +44,6 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, validate_default=False)
 
 
-# =====================================================================================================
-# Environment
-# =====================================================================================================
 class Water(_Model):
     """Water density and gravity."""
     density: Num(ge=500, le=2000, unit="kg/m^3") = 1025.0
@@ -420,6 +51,8 @@ class Water(_Model):
 
 
 Depth = Num(ge=0, unit="m")
+
+
 CurrentVec = Vec3(abs_le=10, unit="m/s")
 
 
@@ -477,9 +110,6 @@ class Current(_Model):
         return vs[-1]  # pragma: no cover
 
 
-# =====================================================================================================
-# Vessel: manoeuvres, excitation, ramp
-# =====================================================================================================
 Speed = Num(ge=0, le=30, unit="m/s")
 
 
@@ -615,6 +245,8 @@ Manoeuvre = Annotated[
                               (TurnManoeuvre, SpeedChangeManoeuvre)),
                   custom_error_type="bad_manoeuvre", custom_error_message="invalid manoeuvre type"),
 ]
+
+
 Excitation = Annotated[
     Union[Annotated[SinusoidExcitation, Tag("@sinusoid")], Annotated[TimeSeriesExcitation, Tag("@time_series")]],
     Discriminator(_tag_by_key("type", {"sinusoid": "@sinusoid", "time_series": "@time_series"},
@@ -704,9 +336,6 @@ class Vessel(_Model):
         return self
 
 
-# =====================================================================================================
-# Lines and attachments
-# =====================================================================================================
 class JunctionAttachment(_Model):
     """Top of a line on another line: ``distance`` (m) along that line's unstretched length from its top."""
     line: Name
@@ -753,11 +382,14 @@ Top = Annotated[
           Annotated[BodyAttachment, Tag("@body_top")]],
     Discriminator(_top_disc, custom_error_type="bad_top", custom_error_message="invalid top attachment"),
 ]
+
+
 Bottom = Annotated[
     Union[Annotated[Literal["free"], Tag("@free")], Annotated[BodyAttachment, Tag("@body_bottom")],
           Annotated[AnchorAttachment, Tag("@anchor")]],
     Discriminator(_bottom_disc, custom_error_type="bad_bottom", custom_error_message="invalid bottom attachment"),
 ]
+
 
 BULK_DENSITY_RANGE = (300.0, 20000.0)
 
@@ -851,9 +483,6 @@ class Line(_Model):
         return distribute_segments(self.segments, spans)
 
 
-# =====================================================================================================
-# Bodies
-# =====================================================================================================
 class CoefficientTable(_Model):
     """Force/moment coefficients vs incidence. A table starting at 0 deg is mirrored (drag even, lift and
     moment odd); outside the table the end value is held."""
@@ -978,6 +607,7 @@ Body = Annotated[
                   custom_error_type="bad_body", custom_error_message="invalid body kind"),
 ]
 
+
 _TAG_CLASSES = {
     "@turn": TurnManoeuvre, "@speed_change": SpeedChangeManoeuvre, "@sinusoid": SinusoidExcitation,
     "@time_series": TimeSeriesExcitation, "@junction": JunctionAttachment, "@body_top": BodyAttachment,
@@ -985,9 +615,6 @@ _TAG_CLASSES = {
 }
 
 
-# =====================================================================================================
-# Solver
-# =====================================================================================================
 class Solver(_Model):
     """Time integration (``method``: ``houbolt`` — implicit, Newton on the tensions, the default;
     ``generalized_alpha`` (high-frequency spectral radius ``rho_inf``) / ``newmark`` (average
@@ -1014,9 +641,6 @@ class Solver(_Model):
     newton_stop: _choice("change", "estimate") = "change"
 
 
-# =====================================================================================================
-# Sea state
-# =====================================================================================================
 class Sea(_Model):
     """Irregular sea driving the vessel motion: ``hs``/``tp`` or a WMO sea-state ``code`` (0–9) with the
     ``open_ocean`` or ``coastal`` (fetch-limited) period convention; JONSWAP/Bretschneider/PM spectrum;
@@ -1045,7 +669,7 @@ class Sea(_Model):
         return self
 
     def sea_state(self):
-        from .sea import SeaState
+        from ..sea import SeaState
         kw = dict(spectrum=self.spectrum, gamma=self.gamma, heading_deg=self.heading_deg,
                   spreading_s=self.spreading_s)
         if self.code is not None:
@@ -1053,9 +677,6 @@ class Sea(_Model):
         return SeaState(self.hs, self.tp, **kw)
 
 
-# =====================================================================================================
-# Heave compensator and winch
-# =====================================================================================================
 class Compensator(_Model):
     """Heave compensator between the vessel sheave and the cable top (Hover et al. §IV-A): spring k,
     damper b, apparent mass m moving with the top node, stroke ±stroke/2 about mid-stroke with rigid end
@@ -1111,9 +732,6 @@ class Winch(_Model):
         return self
 
 
-# =====================================================================================================
-# Scene
-# =====================================================================================================
 class Scene(_Model):
     """A validated towed-system scene. Build with :func:`load_scene`."""
     name: Name
@@ -1431,237 +1049,4 @@ class Scene(_Model):
         return _validate(data, self._source_dir, None)
 
 
-def _clean(d):
-    """Drop ``None`` values (TOML has no null) recursively."""
-    if isinstance(d, dict):
-        return {k: _clean(v) for k, v in d.items() if v is not None}
-    if isinstance(d, list):
-        return [_clean(v) for v in d]
-    return d
-
-
-_TOKEN = re.compile(r"([^.\[\]]+)|\[([^\]]*)\]")
-
-
-def _split_path(path: str) -> list[str]:
-    if not path or path.startswith(".") or path.endswith("."):
-        raise ValueError(f"not a dotted path: {path!r}")
-    toks = [m.group(1) if m.group(1) is not None else m.group(2) for m in _TOKEN.finditer(path)]
-    if not toks or "".join(toks) == "" or any(t == "" for t in toks):
-        raise ValueError(f"not a dotted path: {path!r}")
-    return [t.strip() for t in toks]
-
-
-def _list_index(lst: list, tok: str) -> int:
-    if re.fullmatch(r"-?\d+", tok):
-        i = int(tok)
-        if not -len(lst) <= i < len(lst):
-            raise IndexError(f"index {i} out of range (list has {len(lst)} entries)")
-        return i % len(lst)
-    names = [x.get("name") if isinstance(x, dict) else None for x in lst]
-    if tok in names:
-        return names.index(tok)
-    raise KeyError(f"no entry named {tok!r} (names: {', '.join(repr(n) for n in names if n is not None) or 'none'})")
-
-
-def _set_path(data: dict, path: str, value: Any) -> None:
-    toks = _split_path(path)
-    cur: Any = data
-    for t in toks[:-1]:
-        if isinstance(cur, list):
-            cur = cur[_list_index(cur, t)]
-        elif isinstance(cur, dict):
-            if t not in cur or cur[t] is None:
-                cur[t] = {}
-            elif not isinstance(cur[t], (dict, list)):
-                cur[t] = {}
-            cur = cur[t]
-        else:
-            raise TypeError(f"cannot descend into {_short(cur)} at {t!r}")
-    last = toks[-1]
-    if isinstance(cur, list):
-        i = _list_index(cur, last)
-        if value is None:
-            del cur[i]
-        else:
-            cur[i] = value
-    elif isinstance(cur, dict):
-        if value is None:
-            cur.pop(last, None)
-        else:
-            cur[last] = value
-    else:
-        raise TypeError(f"cannot set {last!r} inside {_short(cur)}")
-
-
-# =====================================================================================================
-# TOML writer (tomllib only reads)
-# =====================================================================================================
-_BARE = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def _key(k: str) -> str:
-    return k if _BARE.match(k) else _toml_str(k)
-
-
-def _toml_str(s: str) -> str:
-    out = ['"']
-    for ch in s:
-        o = ord(ch)
-        if ch == '"':
-            out.append('\\"')
-        elif ch == "\\":
-            out.append("\\\\")
-        elif ch == "\n":
-            out.append("\\n")
-        elif ch == "\t":
-            out.append("\\t")
-        elif ch == "\r":
-            out.append("\\r")
-        elif o < 0x20 or o == 0x7F:
-            out.append(f"\\u{o:04X}")
-        else:
-            out.append(ch)
-    out.append('"')
-    return "".join(out)
-
-
-def _toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if not math.isfinite(v):
-            return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
-        r = repr(v)
-        return r if any(c in r for c in ".en") else r + ".0"
-    if isinstance(v, str):
-        return _toml_str(v)
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
-    raise TypeError(f"cannot write {type(v).__name__} to TOML")
-
-
-def _is_table_array(v) -> bool:
-    return isinstance(v, list) and len(v) > 0 and all(isinstance(x, dict) for x in v)
-
-
-def _emit_table(d: dict, prefix: str, out: list[str]) -> None:
-    simple = {k: v for k, v in d.items() if not isinstance(v, dict) and not _is_table_array(v)}
-    small = {k: v for k, v in d.items() if isinstance(v, dict) and len(v) <= 3
-             and all(not isinstance(x, (dict, list)) for x in v.values())}
-    for k, v in simple.items():
-        out.append(f"{_key(k)} = {_toml_value(v)}")
-    for k, v in small.items():
-        out.append(f"{_key(k)} = {_toml_value(v)}")
-    for k, v in d.items():
-        if k in simple or k in small:
-            continue
-        name = f"{prefix}.{_key(k)}" if prefix else _key(k)
-        if isinstance(v, dict):
-            out.append("")
-            out.append(f"[{name}]")
-            _emit_table(v, name, out)
-        else:
-            for item in v:
-                out.append("")
-                out.append(f"[[{name}]]")
-                _emit_table(item, name, out)
-
-
-def dumps_toml(d: dict) -> str:
-    """Serialise a scene dict (nested dicts/lists of scalars) to TOML."""
-    out: list[str] = []
-    _emit_table(d, "", out)
-    return "\n".join(out).lstrip("\n") + "\n"
-
-
-# =====================================================================================================
-# Loading
-# =====================================================================================================
-def scene_path(name: str) -> Path:
-    """Path of an embedded scene file."""
-    return SCENES_DIR / f"{name}.toml"
-
-
-def _embedded_names() -> list[str]:
-    try:
-        return sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
-    except OSError:  # pragma: no cover
-        return []
-
-
-def list_scenes() -> dict[str, str]:
-    """Embedded scenes: ``{name: one-line description}`` (the first line of each ``description``)."""
-    out = {}
-    for name in _embedded_names():
-        try:
-            with open(scene_path(name), "rb") as fh:
-                desc = tomllib.load(fh).get("description", "")
-        except (OSError, tomllib.TOMLDecodeError):  # pragma: no cover
-            desc = ""
-        first = next((s.strip() for s in str(desc).splitlines() if s.strip()), "")
-        out[name] = first
-    return out
-
-
-def _validate(data: Any, base_dir, source: str | None) -> Scene:
-    if not isinstance(data, Mapping):
-        raise SceneError([("", f"a scene must be a table/dict (got {_short(data)})")], source)
-    try:
-        sc = Scene.model_validate(dict(data), context={"base_dir": base_dir})
-    except ValidationError as exc:
-        raise SceneError.from_validation_error(exc, source) from None
-    except SceneError:
-        raise
-    except RecursionError:
-        raise SceneError([("", "scene data is nested too deeply")], source) from None
-    except Exception as exc:   # never leak a raw traceback from validation
-        raise SceneError([("", f"{_INTERNAL}: {type(exc).__name__}: {exc}")], source) from None
-    sc._source_dir = str(base_dir) if base_dir is not None else None
-    return sc
-
-
-def _load_file(path: Path, base_dir=None) -> Scene:
-    src = str(path)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise SceneError([("", f"scene file not found: {path}")]) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError([("", f"cannot read scene file {path}: {exc}")]) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError([("", f"invalid TOML: {exc}")], src) from None
-    return _validate(data, base_dir if base_dir is not None else path.resolve().parent, src)
-
-
-def load_scene(source: Any = None, *, base_dir=None) -> Scene:
-    """Load and validate a scene.
-
-    ``source``: a :class:`Scene` (returned as is), a dict, a path to a ``.toml`` file, or the name of an
-    embedded scene (see :func:`list_scenes`); ``None`` loads :data:`DEFAULT_SCENE`. ``base_dir`` overrides
-    the folder against which relative time-series paths resolve. Raises :class:`SceneError` on any
-    problem."""
-    if source is None:
-        source = DEFAULT_SCENE
-    if isinstance(source, Scene):
-        return source
-    if isinstance(source, Mapping):
-        return _validate(copy.deepcopy(dict(source)), base_dir, None)
-    if isinstance(source, (str, PathLike)):
-        s = str(source) if isinstance(source, str) else None
-        names = _embedded_names()
-        if s is not None and s in names:
-            return _load_file(scene_path(s), base_dir if base_dir is not None else SCENE_DATA_DIR)
-        p = Path(source)
-        if p.is_file() or p.suffix.lower() == ".toml":
-            return _load_file(p, base_dir)
-        raise SceneError([("", f"unknown scene {str(source)!r}: not a scene file and not an embedded scene "
-                               f"(embedded: {', '.join(names) or 'none'})")])
-    raise SceneError([("", f"cannot load a scene from a {type(source).__name__}; give a path, a dict, a Scene "
-                           f"or an embedded scene name")])
+from .loading import _validate  # noqa: E402  (circular: used inside methods only)
