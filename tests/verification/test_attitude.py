@@ -375,3 +375,22 @@ def test_recorded_result_reports_the_physical_attitude():
     res = rec.result()
     np.testing.assert_allclose(res.bodies["fish"]["euler"][1:], [s["euler"] for s in states], atol=1e-12)
     np.testing.assert_allclose(res.bodies["fish"]["omega"][1:], [s["omega"] for s in states], atol=1e-12)
+
+
+@pytest.mark.parametrize("method, dt", [("rk4", 1e-3), ("generalized_alpha", 0.01), ("newmark", 0.01)])
+def test_schemes_without_the_chart_refuse_the_vertical_clearly(method, dt):
+    """Issue 18, item 2 ("the moving attitude chart in every scheme, or a clear refusal"): the explicit and
+    α schemes integrate plain Euler angles; a body spun through the vertical stops the run at ±85° with an
+    error naming the limit and the Houbolt scheme — not as an 'unstable' step — and the state is the last
+    good step. Houbolt passes the same spin (test_pure_pitch_spin_passes_the_vertical_exactly)."""
+    sim = towenv.Simulator(dict(spin_scene(dt), solver={"dt": dt, "method": method}))
+    if method == "rk4":
+        sim.scheme.xomg[0] = (0.0, 3.0, 0.0)          # body pitch rate 3 rad/s: 85° after ~0.5 s
+    else:
+        sim.scheme.xdang[0] = (0.0, 3.0, 0.0)
+    with pytest.raises(towenv.SimulationDivergence) as err:
+        sim.advance(1.0)
+    msg = str(err.value)
+    assert "pitch reached ±85°" in msg and 'solver.method = "houbolt"' in msg and "unstable" not in msg
+    assert 0.45 < err.value.time < 0.55
+    assert abs(sim.body_state("fish")["euler"][1]) < math.radians(85.0)

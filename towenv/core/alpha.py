@@ -642,7 +642,7 @@ class AlphaScheme(ExplicitScheme):
                                     f"(after {self.sim.settings.max_step_cuts} step halvings)",
                      K.FAIL_NAN: f"non-finite state in the {name} step",
                      K.FAIL_STRETCH: f"strain above solver.max_strain in the {name} step",
-                     K.FAIL_ANGLE: f"body pitch beyond ±85° in the {name} step"}.get(st, str(st))
+                     K.FAIL_ANGLE: K.NO_CHART_REFUSAL.format(scheme=name)}.get(st, str(st))
             raise SimulationDivergence(t_start + (k + 1) * dt, self._where(st, el), cause,
                                        int(self.sim.settings.max_iterations), float(fres))
 

@@ -317,12 +317,14 @@ class ExplicitScheme(TimeScheme):
         self._sync()
         if st != K.OK:
             from ..errors import SimulationDivergence
+            if st == K.FAIL_ANGLE:
+                cause = K.NO_CHART_REFUSAL.format(scheme=f"explicit {self.name}")
+            else:
+                cause = f"explicit {self.name} step unstable: " + {
+                    K.FAIL_NAN: "non-finite state",
+                    K.FAIL_STRETCH: f"strain above solver.max_strain = {sim.settings.max_strain:g}"}.get(st, str(st))
             raise SimulationDivergence(t_start + (k + 1) * dt, self._explicit_element(st, el),
-                                       f"explicit {self.name} step unstable: "
-                                       + {K.FAIL_NAN: "non-finite state",
-                                          K.FAIL_STRETCH: f"strain above solver.max_strain = {sim.settings.max_strain:g}",
-                                          K.FAIL_ANGLE: "body pitch beyond ±85°"}.get(st, str(st))
-                                       + f" (Δt = {dt:g} s; the state is left at the last good step)")
+                                       cause + f" (Δt = {dt:g} s; the state is left at the last good step)")
 
     def _explicit_element(self, st, el):
         if st == K.FAIL_NAN and el >= 0:

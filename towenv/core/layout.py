@@ -86,6 +86,11 @@ RECHART_PITCH = math.pi / 6.0
 # pitch (rad, ~85°) inside a body's attitude chart at which a step fails (FAIL_ANGLE): the Euler-angle
 # singularity guard of every scheme
 PITCH_LIMIT = 1.48
+#: what the schemes without the moving attitude chart (explicit, generalized-α, Newmark) say when a body
+#: reaches PITCH_LIMIT: a refusal of that attitude, not a numerical instability
+NO_CHART_REFUSAL = ("body pitch reached ±85°, the limit of the plain Euler angles the {scheme} scheme integrates "
+                    "(it has no moving attitude chart; solver.method = \"houbolt\" has one and takes bodies "
+                    "through the vertical)")
 
 # heave compensator parameter layout (float64[16])
 C_MODE, C_K, C_B, C_MASS, C_PRELOAD, C_SMIN, C_SMAX, C_TRIAL, C_UNUSED, C_CMD, C_TAU, C_RATE, C_NODE, C_SHIP = range(14)
