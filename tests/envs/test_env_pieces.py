@@ -16,6 +16,11 @@ reassociation, which numba/LLVM apply per function before inlining, so the round
 moved in the last bits and the Newton iterates with it. Measured against the file recorded at cbf06b3:
 flags and info texts identical; largest differences 5.3e-10 in rewards (of ~99), 4.7e-10 in observations
 (of ~1), i.e. well inside the Newton tolerance (the Houbolt attitude reference stayed bit-identical).
+Regenerated a second time for the same helpers: the Jacobian picked its tangent components by indexing a
+tuple with the loop variable, which measured 3 % slower per step than the inline code (scripts/bench_core.py,
+paired runs), and now selects them instead — same formula, last bits moved again. Against the cbf06b3 file:
+flags and info texts identical, largest difference 4.5e-10 (in rewards of ~6000); against the first
+regeneration 9.2e-10 (rewards of ~99).
 
 As for ``houbolt_reference.npz``, numba compiles for the host CPU: the file records :func:`fingerprint`
 and the comparison is bit for bit when it matches, to round-off otherwise.
