@@ -12,7 +12,9 @@ per control step), random actions drawn in advance, evaluation sea 4 (coastal SS
   step for all copies) for N = ``--sizes``: serial loop over copies (CPU time), and with ``parallel=True``
   (``prange`` over ``--threads`` numba threads; wall-clock time, since CPU time adds up the threads);
 * for comparison, Python loops over N single envs: Gymnasium ``SyncVectorEnv`` (``vectorization_mode="sync"``)
-  and SB3 ``DummyVecEnv`` (``make_vec_env``), and the SB3 adapter ``TowSB3VecEnv`` over the batched env.
+  and SB3 ``DummyVecEnv`` (``make_vec_env``), and the SB3 adapter ``TowSB3VecEnv`` over the batched env;
+* the yardstick of issue 15: Gymnasium's ``Pendulum-v1`` (unwrapped and through ``gym.make``, same steps and
+  repeats, same run), and each towenv figure's cost per env-step as a multiple of a Pendulum step.
 
     python scripts/bench_env.py                                  # about two minutes
     python scripts/bench_env.py --steps 1000 --repeats 3 --sizes 1 8
@@ -139,6 +141,21 @@ def bench_loops(env_id, n, steps, repeats):
     return res
 
 
+def bench_pendulum(steps, repeats):
+    """Gymnasium's Pendulum-v1 with the same number of random-action steps (the issue's yardstick)."""
+    import gymnasium as gym
+    made = gym.make("Pendulum-v1")
+    acts = np.random.default_rng(0).uniform(-2, 2, (steps, 1)).astype(np.float32)
+
+    def run(e):
+        def f():
+            e.reset(seed=0)
+            for a in acts:
+                e.step(a)
+        return f
+    return {"unwrapped": _rate(run(made.unwrapped), steps, repeats), "gym.make": _rate(run(made), steps, repeats)}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=2000, help="single-env control steps per run (default 2000)")
@@ -179,6 +196,15 @@ def main(argv=None):
         if any(k[0] == "prange" for k in v):
             print(f"| {env_id} | prange, {args.threads} threads (wall clock) | "
                   + " | ".join(f"{v[('prange', n)][0]:,.0f}" for n in args.sizes) + " |")
+    pend = bench_pendulum(args.steps, args.repeats)
+    print("\n## Cost per env-step relative to Gymnasium `Pendulum-v1` in the same run (goals: single ≤ 3×, batched ≤ 1×)\n")
+    print(f"Pendulum-v1: unwrapped {fmt(pend['unwrapped'])}, gym.make {fmt(pend['gym.make'])} steps/s\n")
+    nmax = max(args.sizes)
+    print(f"| environment | single, unwrapped | single, gym.make | batched serial N = {nmax} |")
+    print("|---|---|---|---|")
+    for env_id, s in singles.items():
+        print(f"| {env_id} | {pend['unwrapped'][0] / s['unwrapped'][0]:.2f}× | {pend['gym.make'][0] / s['gym.make'][0]:.2f}× "
+              f"| {pend['unwrapped'][0] / vecs[env_id][('batched', nmax)][0]:.2f}× |")
     print(f"\n## Python loops over N = {args.loop_envs} single envs, for comparison (total env-steps/s)\n")
     names = list(next(iter(loops.values())))
     print("| environment | " + " | ".join(names) + " |")

@@ -1,0 +1,82 @@
+"""Benchmark (issue 15, first use): `import towenv`, the first run of README command 1, and a cached run.
+
+* ``import towenv``: wall time of ``python -c "import towenv"`` in fresh processes, median of ``--imports``;
+* first run: ``towenv simulate two_part_tow_1 --duration 120`` with an empty numba cache (a fresh
+  ``NUMBA_CACHE_DIR``), CPU time of the whole command (user + system of the child) — what a user pays once
+  after installing — and the same command again with that cache filled; their difference is the compilation;
+* the real-time factor the run's summary reports (it starts after compilation).
+
+``--numba-opt N`` sets NUMBA_OPT for both runs (numba's LLVM optimisation level, default 3): with 0 it shows
+how much of the compile time is optimisation, and what the run would lose (the cached run's RTF).
+
+    python scripts/bench_startup.py                    # ~1 minute
+    python scripts/bench_startup.py --numba-opt 0
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def _child_cpu(cmd, env):
+    """(CPU seconds of the child, wall seconds, completed process)."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    w0 = time.perf_counter()
+    p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - w0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime), wall, p
+
+
+def _find(d, key):
+    """The first value of ``key`` anywhere in a nested dict (None if absent)."""
+    if isinstance(d, dict):
+        if key in d:
+            return d[key]
+        for v in d.values():
+            found = _find(v, key)
+            if found is not None:
+                return found
+    return None
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--imports", type=int, default=7, help="import-time samples (default 7)")
+    ap.add_argument("--numba-opt", type=int, choices=(0, 1, 2, 3), default=None)
+    a = ap.parse_args(argv)
+    env = dict(os.environ)
+    if a.numba_opt is not None:
+        env["NUMBA_OPT"] = str(a.numba_opt)
+    imports = [_child_cpu([sys.executable, "-c", "import towenv"], env)[1] for _ in range(a.imports)]
+    with tempfile.TemporaryDirectory() as tmp:
+        env["NUMBA_CACHE_DIR"] = str(Path(tmp) / "numba")
+        out = Path(tmp) / "out"
+        cmd = [sys.executable, "-m", "towenv", "simulate", "two_part_tow_1", "--duration", "120", "--out", str(out),
+               "--no-plots", "-q"]
+        cold_cpu, cold_wall, p = _child_cpu(cmd, env)
+        if p.returncode != 0:
+            sys.exit(f"bench_startup: the first run failed:\n{p.stderr}")
+        rtf = _find(json.loads((out / "summary.json").read_text()), "real_time_factor")
+        warm_cpu, warm_wall, p = _child_cpu(cmd, env)
+    opt = f"NUMBA_OPT={a.numba_opt}" if a.numba_opt is not None else "numba's default optimisation"
+    print(f"# towenv first use — Python {sys.version.split()[0]}, {os.cpu_count()} cores, {opt}")
+    print(f"import towenv: median {statistics.median(imports):.2f} s wall (min {min(imports):.2f}, max "
+          f"{max(imports):.2f}; {len(imports)} fresh processes; goal ≤ 1 s)")
+    print("README command 1 (towenv simulate two_part_tow_1 --duration 120, no plots):")
+    print(f"  empty numba cache:  {cold_cpu:6.1f} s CPU ({cold_wall:.1f} s wall)")
+    print(f"  cache filled:       {warm_cpu:6.1f} s CPU ({warm_wall:.1f} s wall)")
+    print(f"  compilation:        {cold_cpu - warm_cpu:6.1f} s CPU (goal ≤ 30 s)")
+    print(f"  real-time factor in the first run's summary (after compilation): {rtf}")
+
+
+if __name__ == "__main__":
+    main()
