@@ -22,6 +22,8 @@ What a scheme cannot simulate is refused by the scene's validation (a :class:`to
 """
 from __future__ import annotations
 
+import numpy as np
+
 from . import kernels as K
 
 METHODS = ("houbolt", "generalized_alpha", "newmark", "euler", "rk2", "rk4", "quasi_static")
@@ -88,7 +90,6 @@ class HouboltScheme(TimeScheme):
             raise sim._divergence(st, el, md, t_start + (done + k + 1) * dt)
 
     def warm_up(self):
-        import numpy as np
         kd = self.sim.kernel_data()
         K.advance(0, self.sim.settings.dt, np.empty((0, 3)), *kd.head, self.sim.t, kd.wave)
 
