@@ -1,0 +1,374 @@
+"""Augmented Random Search (ARS) on a linear residual over the along-cable law, for ``towenv/WinchPayout-v0``.
+
+PPO residual policies on the along-cable law never beat it (docs/agents.md, "What was tried"): a memoryless
+policy cannot anticipate the tow point's motion, and the policy-gradient noise moves it off a sharp optimum.
+The tow point's along-cable motion *is* predictable from its own recent past (a linear predictor of its
+displacement from the last 3 s: R² 0.98 at 1 s ahead, 0.95 at 2 s in the code-3 sea), so the policy here
+sees that past, and is trained by random search in parameter space (Mania et al. 2018, "Simple random search
+provides a competitive approach to reinforcement learning": ARS V1-t, fixed feature scales, the best b of N
+directions, step normalised by the rewards' standard deviation). The policy::
+
+    a = clip(a_along(obs) + θ_c · φ(history), −1, 1)
+
+* ``a_along`` — the along-cable law (``agents/classical.py``) with its tuned per-sea-state gains (the table is
+  copied into the policy file, so retuning ``baselines.yml`` later does not change a trained policy);
+* ``φ`` — :data:`HISTORY_CHANNELS` (MRU along-cable velocity, acceleration, displacement) at the lags
+  :data:`LAG_STEPS` (0, 0.2, …, 2.0 s), :data:`INSTANT_CHANNELS` (winch-line length change, fish heave about its
+  running mean and its rate) and a constant, each divided by a fixed scale (:data:`FEATURE_SCALES`);
+* ``θ_c`` — one weight vector per sea state of the along-cable gain table (the same schedule as the base).
+
+θ = 0 is the along-cable law exactly. The policy is causal: it acts on the observation vector and its own
+memory of earlier observations, plus the sea-state estimate at episode start (as the base does).
+
+Training (:func:`train`, ``python scripts/train_ars.py``) evaluates all perturbations of an iteration as one
+batch of the vector environment, with common random numbers: the + and − perturbation of a direction run the
+same sea states and wave seeds, and the along-cable law runs them too, so the reward of an episode is the log
+ratio of its σ(fish heave) (and, weighted, σ(pitch)) to the along-cable law's on the same waves. Wave seeds are
+fresh every iteration: ``1000·code + j + 40000 + 100·iteration + 100000·seed`` — never an evaluation (+0…400),
+tuning (+500), validation (+700), Hover design (+900), final (+20000) or clairvoyant-teacher (+30000) seed.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .common import ObsReader, nearest_key
+
+__all__ = ["ARSPolicy", "train", "save_policy", "load_ars_policy", "features_single", "HISTORY_CHANNELS",
+           "INSTANT_CHANNELS", "LAG_STEPS", "FEATURE_SCALES", "TRAIN_SEED_OFFSET", "feature_names"]
+
+ENV_ID = "towenv/WinchPayout-v0"
+#: channels whose recent history the policy sees, and the lags (control steps of 0.1 s): 0, 0.2, …, 2.0 s
+HISTORY_CHANNELS = ("tow_vel_along", "tow_acc_along", "tow_disp_along")
+LAG_STEPS = tuple(range(0, 21, 2))
+#: channels the policy sees at the current step only
+INSTANT_CHANNELS = ("winch_length_dev", "fish_heave_dev", "fish_heave_rate")
+#: fixed feature scales: each channel's standard deviation under the along-cable law on training-seed episodes
+#: (all three coastal sea states pooled; measured once, kept fixed so that the policy is a fixed function)
+FEATURE_SCALES = {"tow_vel_along": 0.7089, "tow_acc_along": 1.4686, "tow_disp_along": 0.3845,
+                  "winch_length_dev": 0.6488, "fish_heave_dev": 0.1043, "fish_heave_rate": 0.1499}
+#: wave seeds of training: base seed (1000·code + j) + 40000 + 100·iteration + 100000·training seed
+TRAIN_SEED_OFFSET = 40000
+N_HISTORY = max(LAG_STEPS) + 1
+GAIN_KEYS = ("g_ff", "tau", "kl", "kp", "kd")
+
+
+def feature_names() -> list[str]:
+    return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
+            + ["const"])
+
+
+N_FEATURES = len(feature_names())
+
+
+def _train_seed(base_seed: int, iteration: int, seed: int) -> int:
+    return int(base_seed) + TRAIN_SEED_OFFSET + 100 * int(iteration) + 100000 * int(seed)
+
+
+# ============================================================================ the policy (one environment)
+class ARSPolicy:
+    """A trained linear residual (module docstring) with SB3's ``predict``. Bind it to the environment it acts in
+    with :meth:`bind_env` (``scripts/evaluate.py`` does); pass ``episode_start=True`` on the first step of every
+    episode (it reads the sea-state estimate then and clears its memory)."""
+    acts_on = "observations (and their history) + sea state"
+
+    def __init__(self, theta: dict, base_table: dict, scales: dict | None = None, meta: dict | None = None,
+                 name: str = "ars"):
+        self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
+        bad = [k for k, v in self.theta.items() if v.shape != (N_FEATURES,)]
+        if bad:
+            raise ValueError(f"ARSPolicy: theta entries {bad} do not have {N_FEATURES} features")
+        self.base_table = dict(base_table)
+        self.scales = dict(FEATURE_SCALES | (scales or {}))
+        self.meta = dict(meta or {})
+        self.meta.setdefault("algo", "ars")
+        self.meta.setdefault("env_id", ENV_ID)
+        self.meta.setdefault("env_kwargs", {})
+        self.name = name
+        self.env = None
+        self._hist = None
+        self._th = None
+
+    def bind_env(self, env):
+        from .classical import AlongCableWinch
+        self.env = env
+        self.base = AlongCableWinch(env, table=self.base_table)
+        self.reader = self.base.reader
+        self.u = env.unwrapped
+        return self
+
+    def reset(self, env=None):
+        if env is not None:
+            self.bind_env(env)
+        self._hist = None
+
+    def predict(self, obs, state=None, episode_start=None, deterministic: bool = True):
+        if self.env is None:
+            raise RuntimeError("ARSPolicy: call bind_env(env) before predict()")
+        o = np.asarray(obs, dtype=float)
+        if o.ndim == 2:
+            o = o[0]
+        start = episode_start is not None and bool(np.any(episode_start))
+        if start or self._hist is None:
+            self.base.reset()
+            self._th = self.theta[nearest_key(self.theta, self.u.sea[0])]
+            self._hist = None
+        a_base = float(self.base.act(o)[0])
+        phi, self._hist = features_single(self.reader, o, self.scales, self._hist)
+        a = min(max(a_base + float(self._th @ phi), -1.0), 1.0)
+        out = np.array([a], np.float32)
+        return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
+
+
+def features_single(reader, obs, scales, hist):
+    """φ of one observation given the history ring ``hist`` ((3, N_HISTORY), newest first; None at episode start:
+    filled with the first observation). Returns (φ, new ring). Same arithmetic as the batched :class:`_Batch`."""
+    h = np.array([reader(obs, c) / scales[c] for c in HISTORY_CHANNELS])
+    if hist is None:
+        hist = np.repeat(h[:, None], N_HISTORY, axis=1)
+    else:
+        hist = np.roll(hist, 1, axis=1)
+        hist[:, 0] = h
+    inst = [reader(obs, c) / scales[c] for c in INSTANT_CHANNELS]
+    return np.concatenate([hist[:, list(LAG_STEPS)].reshape(-1), inst, [1.0]]), hist
+
+
+# ============================================================================ batched rollouts (training)
+class _Batch:
+    """The along-cable law and the features for a batch of observations (same arithmetic as the single-env
+    :class:`ARSPolicy`: observation float32 → float64 × channel scale, then the law)."""
+
+    def __init__(self, venv, base_table: dict, scales: dict):
+        self.reader = ObsReader(venv.envs[0])
+        self.vmax = float(venv.envs[0].winch_max_speed)
+        self.table = base_table
+        self.scales = scales
+        self.col = {}
+        for ch in set(HISTORY_CHANNELS) | set(INSTANT_CHANNELS):
+            sl, sc, _vec = self.reader._slices[ch]
+            self.col[ch] = (sl.start, sc)
+
+    def ch(self, obs, name):
+        j, sc = self.col[name]
+        return obs[:, j].astype(float) * sc
+
+    def set_seas(self, seas):
+        from .classical import DEFAULT_ALONG_GAINS
+        self.G = np.array([[float((DEFAULT_ALONG_GAINS | self.table[nearest_key(self.table, s)])[k]) for k in GAIN_KEYS]
+                           for s in seas])
+
+    def base_action(self, obs):
+        g_ff, tau, kl, kp, kd = (self.G[:, k] for k in range(5))
+        ff = g_ff * (self.ch(obs, "tow_vel_along") + tau * self.ch(obs, "tow_acc_along"))
+        centre = -kl * (self.ch(obs, "winch_length_dev") - g_ff * self.ch(obs, "tow_disp_along"))
+        fb = kp * self.ch(obs, "fish_heave_dev") + kd * self.ch(obs, "fish_heave_rate")
+        return np.minimum(np.maximum((ff + centre + fb) / self.vmax, -1.0), 1.0)
+
+    def features(self, obs, first: bool):
+        n = obs.shape[0]
+        h = np.stack([self.ch(obs, c) / self.scales[c] for c in HISTORY_CHANNELS], axis=1)
+        if first:
+            self.hist = np.repeat(h[:, :, None], N_HISTORY, axis=2)
+        else:
+            self.hist = np.roll(self.hist, 1, axis=2)
+            self.hist[:, :, 0] = h
+        lagged = self.hist[:, :, list(LAG_STEPS)].reshape(n, -1)
+        inst = np.stack([self.ch(obs, c) / self.scales[c] for c in INSTANT_CHANNELS], axis=1)
+        return np.concatenate([lagged, inst, np.ones((n, 1))], axis=1)
+
+
+def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0):
+    """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i]); returns
+    σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard per copy (NaN for a copy that ended early)."""
+    n = venv.num_envs
+    seeds = [int(s) for s in seeds]
+    obs = None
+    for i in range(n):
+        mask = np.zeros(n, bool)
+        mask[i] = True
+        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    batch.set_seas(seas)
+    T = venv.envs[0].max_steps
+    H = np.zeros((T, n))
+    P = np.zeros((T, n))
+    t = np.zeros(T)
+    ended = np.zeros(n, bool)
+    for k in range(T):
+        phi = batch.features(obs, k == 0)
+        a = np.clip(batch.base_action(obs) + np.einsum("nf,nf->n", theta, phi), -1.0, 1.0)
+        obs, _r, term, trunc, infos = venv.step(a.astype(np.float32)[:, None])
+        H[k] = infos["fish_heave"]
+        P[k] = infos["fish_pitch"]
+        t[k] = infos["t"][0]
+        if k < T - 1:
+            ended |= term | trunc
+    w = t >= discard
+    sh = H[w].std(axis=0)
+    sp = np.degrees(P[w].std(axis=0))
+    sh[ended] = np.nan
+    sp[ended] = np.nan
+    return sh, sp
+
+
+# ============================================================================ training
+def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, directions: int = 8, top: int = 4,
+          nu: float = 0.001, alpha: float = 0.0007, pitch_weight: float = 0.5, episode_seconds: float = 180.0,
+          fail_penalty: float = 1.0, progress: bool = True, log=print) -> ARSPolicy:
+    """ARS V1-t (module docstring) on the 12 evaluation (Hs, Tp, heading) entries with training wave seeds; one
+    search per sea state of the along-cable table, sharing one batched rollout per iteration. Reward of an
+    episode: −[ln(σ_h/σ_h,along) + pitch_weight · ln(σ_θ/σ_θ,along)] on the same waves. Stops after
+    ``max_iterations`` or when the next iteration would pass ``minutes`` of wall time."""
+    import gymnasium as gym
+    import towenv  # noqa: F401  (registers the ids)
+    from towenv.envs.vector import WinchPayoutVectorEnv
+    from .baselines import load_tuned
+    t_start = time.perf_counter()
+    table = dict(load_tuned().get("along_cable") or {})
+    if not table:
+        raise RuntimeError("no tuned along_cable table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
+    env = gym.make(ENV_ID)
+    ev = env.unwrapped.eval_sea_states()
+    env.close()
+    keys = sorted(table)
+    ent = {k: [i for i, (sea, _s) in enumerate(ev) if nearest_key(table, sea) == k] for k in keys}
+    keys = [k for k in keys if ent[k]]
+    C, K = len(keys), int(directions)
+    n_pert = sum(2 * K * len(ent[k]) for k in keys)
+    n_copies = n_pert + 2 * len(ev)
+    venv = WinchPayoutVectorEnv(num_envs=n_copies, autoreset_mode="NextStep", batch_infos=True,
+                                episode_seconds=float(episode_seconds))
+    batch = _Batch(venv, table, dict(FEATURE_SCALES))
+    rng = np.random.default_rng(int(seed))
+    theta = np.zeros((C, N_FEATURES))
+    curve = []
+    log(f"[ars] seed {seed}: {C} sea states x {K} directions x 2 signs + 2 x {len(ev)} reference episodes = "
+        f"{n_copies} copies of {episode_seconds:g} s per iteration; nu={nu} alpha={alpha} top={top} "
+        f"pitch_weight={pitch_weight}; {N_FEATURES} features per sea state")
+    it = 0
+    last = 0.0
+    while it < max_iterations:
+        elapsed = time.perf_counter() - t_start
+        if elapsed + last > 60.0 * minutes:
+            break
+        t0 = time.perf_counter()
+        delta = rng.standard_normal((C, K, N_FEATURES))
+        seas, seeds, th, owner = [], [], [], []
+        for ci, k in enumerate(keys):
+            for d in range(K):
+                for sign in (1.0, -1.0):
+                    for e in ent[k]:
+                        seas.append(ev[e][0])
+                        seeds.append(_train_seed(ev[e][1], it, seed))
+                        th.append(theta[ci] + sign * nu * delta[ci, d])
+                        owner.append(e)
+        for which in ("theta", "along"):
+            for e, (sea, s) in enumerate(ev):
+                ci = keys.index(nearest_key(table, sea))
+                seas.append(sea)
+                seeds.append(_train_seed(s, it, seed))
+                th.append(theta[ci] if which == "theta" else np.zeros(N_FEATURES))
+        sh, sp = rollout_batch(venv, batch, seas, seeds, np.array(th))
+        cur_h, base_h = sh[n_pert:n_pert + len(ev)], sh[n_pert + len(ev):]
+        cur_p, base_p = sp[n_pert:n_pert + len(ev)], sp[n_pert + len(ev):]
+        cost = np.where(np.isfinite(sh[:n_pert]),
+                        np.log(sh[:n_pert] / base_h[owner]) + pitch_weight * np.log(sp[:n_pert] / base_p[owner]),
+                        fail_penalty)
+        j = 0
+        steps = []
+        for ci, k in enumerate(keys):
+            ne = len(ent[k])
+            R = -cost[j:j + 2 * K * ne].reshape(K, 2, ne).mean(axis=2)
+            j += 2 * K * ne
+            rp, rm = R[:, 0], R[:, 1]
+            order = np.argsort(-np.maximum(rp, rm))[:top]
+            sd = float(np.concatenate([rp[order], rm[order]]).std())
+            sd = sd if sd > 1e-12 else 1.0
+            step = alpha / (top * sd) * ((rp[order] - rm[order])[:, None] * delta[ci, order]).sum(axis=0)
+            theta[ci] += step
+            steps.append(float(np.linalg.norm(step)))
+        pooled_h = float(np.nanmean(cur_h) / np.nanmean(base_h))
+        pooled_p = float(np.nanmean(cur_p) / np.nanmean(base_p))
+        last = time.perf_counter() - t0
+        curve.append({"iteration": it, "heave_ratio": pooled_h, "pitch_ratio": pooled_p, "seconds": last,
+                      "failures": int(np.sum(~np.isfinite(sh)))})
+        if progress:
+            log(f"[ars] it {it:3d} ({last:4.1f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): policy before "
+                f"this step vs along_cable on {len(ev)} fresh training episodes: heave {100 * (pooled_h - 1):+6.2f} %, "
+                f"pitch {100 * (pooled_p - 1):+5.1f} %; |step| {', '.join(f'{s:.4f}' for s in steps)}")
+        it += 1
+    venv.close()
+    meta = {"algo": "ars", "env_id": ENV_ID, "env_kwargs": {}, "seed": int(seed), "iterations": it,
+            "wall_seconds": time.perf_counter() - t_start,
+            "hyperparameters": {"directions": K, "top": top, "nu": nu, "alpha": alpha, "pitch_weight": pitch_weight,
+                                "episode_seconds": episode_seconds, "minutes": minutes,
+                                "max_iterations": max_iterations, "fail_penalty": fail_penalty},
+            "train_seeds": f"1000*code + j + {TRAIN_SEED_OFFSET} + 100*iteration + 100000*{int(seed)}",
+            "curve": curve}
+    return ARSPolicy({k: theta[ci] for ci, k in enumerate(keys)}, table, FEATURE_SCALES, meta, name=f"ars_s{seed}")
+
+
+# ============================================================================ files
+def save_policy(policy: ARSPolicy, path: str | Path) -> Path:
+    """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON),
+    atomically."""
+    from towenv.atomic import atomic_savez
+    path = Path(path)
+    keys = sorted(policy.theta)
+    meta = dict(policy.meta) | {"features": feature_names(), "lag_steps": list(LAG_STEPS),
+                                "history_channels": list(HISTORY_CHANNELS), "instant_channels": list(INSTANT_CHANNELS)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_savez(path, {"theta": np.array([policy.theta[k] for k in keys]), "keys": np.array(keys),
+                        "base_table": np.array(json.dumps(policy.base_table)),
+                        "scales": np.array(json.dumps(policy.scales)), "meta": np.array(json.dumps(meta))})
+    return path
+
+
+def load_ars_policy(path: str | Path) -> ARSPolicy:
+    """Read a policy written by :func:`save_policy` (bind it to an environment before use)."""
+    path = Path(path)
+    with np.load(path, allow_pickle=False) as z:
+        if "theta" not in z or "keys" not in z:
+            raise ValueError(f"{path}: not an ARS policy file (no theta/keys)")
+        meta = json.loads(str(z["meta"]))
+        if meta.get("features") != feature_names():
+            raise ValueError(f"{path}: its features differ from this version's ({len(meta.get('features', []))} "
+                             f"against {N_FEATURES})")
+        theta = {str(k): np.array(v) for k, v in zip(z["keys"], z["theta"])}
+        return ARSPolicy(theta, json.loads(str(z["base_table"])), json.loads(str(z["scales"])), meta,
+                         name=path.stem)
+
+
+def main(argv=None) -> int:
+    """``python scripts/train_ars.py --seed 0 --minutes 40 --export agents/trained/ars_WinchPayout-v0_s0.npz``"""
+    import argparse
+    ap = argparse.ArgumentParser(description="Train an ARS linear residual over the along-cable winch law "
+                                             "(towenv/WinchPayout-v0); agents/ars.py explains the method.")
+    ap.add_argument("--seed", type=int, default=0, help="training seed: ARS directions and training wave seeds")
+    ap.add_argument("--minutes", type=float, default=40.0, help="wall-clock budget (default 40)")
+    ap.add_argument("--max-iterations", type=int, default=1000)
+    ap.add_argument("--directions", type=int, default=8)
+    ap.add_argument("--top", type=int, default=4)
+    ap.add_argument("--nu", type=float, default=0.001, help="exploration noise in parameter space")
+    ap.add_argument("--alpha", type=float, default=0.0007, help="step size")
+    ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
+    ap.add_argument("--episode-seconds", type=float, default=180.0)
+    ap.add_argument("--export", default=None, help="policy file (default runs/ars_WinchPayout-v0_s<seed>.npz)")
+    a = ap.parse_args(argv)
+    for name in ("minutes", "nu", "alpha", "episode_seconds"):
+        v = getattr(a, name)
+        if not (math.isfinite(v) and v > 0):
+            ap.error(f"--{name.replace('_', '-')} must be a positive number (got {v})")
+    if a.directions < 1 or not 1 <= a.top <= a.directions or a.max_iterations < 1 or a.pitch_weight < 0:
+        ap.error("need --directions >= 1, 1 <= --top <= --directions, --max-iterations >= 1, --pitch-weight >= 0")
+    if a.episode_seconds < 120.0:
+        ap.error("--episode-seconds must be >= 120 (the score starts at 60 s)")
+    out = Path(a.export or f"runs/ars_WinchPayout-v0_s{a.seed}.npz")
+    pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
+                a.episode_seconds)
+    save_policy(pol, out)
+    print(f"[ars] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
+    return 0
