@@ -12,11 +12,13 @@ Layout
 * :mod:`agents.metrics`    — rollouts with common random numbers, per-episode metrics, bootstrap CIs.
 * :mod:`agents.report`     — the Markdown/PNG/HTML evaluation report.
 
+* :mod:`agents.ars`        — ARS (random search) on a linear residual over the along-cable winch law, with the
+  MRU along-cable history as features; its policy file (.npz) and loader.
 * :mod:`agents.train`, :mod:`agents.evaluate` — the training and evaluation command lines
   (``python -m agents.train`` = ``python scripts/train.py``; same for evaluate).
 
 ``agents`` is installed next to ``towenv`` (``pip install ".[rl]"``; its tuned tables, hyperparameter YAMLs
-and the committed policies ``agents/trained/*.zip`` are package data), so ``import agents`` works from any
+and the committed policies ``agents/trained/*.zip``, ``*.npz`` are package data), so ``import agents`` works from any
 folder. ``import agents`` itself is light; the modules that need torch/stable-baselines3 import them when used.
 """
 from __future__ import annotations

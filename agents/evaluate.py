@@ -1,7 +1,8 @@
 """Evaluate a policy and every baseline on the evaluation sea states; write a report.
 
-POLICY is a policy zip written by scripts/train.py (algorithm and environment from its metadata), any
-SB3 zip (give --algo and --env), or a baseline name (then --env is needed). Every controller runs the
+POLICY is a policy zip written by scripts/train.py (algorithm and environment from its metadata), an ARS
+policy .npz written by scripts/train_ars.py, any SB3 zip (give --algo and --env), or a baseline name (then
+--env is needed). Every controller runs the
 same episodes: ``env.unwrapped.eval_sea_states()`` (12 = WMO codes 3-5 × 4 headings), optionally with
 extra wave seeds per entry (--replicates). Writes ``<out-dir>/<name>/report.md``, ``summary.png``,
 ``psd.png``, ``timeseries.png``, ``metrics.csv``, ``summary.json`` (+ ``report.html``), each file
@@ -76,8 +77,8 @@ def _fail(message: str):
 def parse_args(argv=None):
     p = _Parser(prog="evaluate.py", description=__doc__.split("\n\n")[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n", 1)[1])
-    p.add_argument("policy", help="policy zip, or a baseline name")
-    p.add_argument("--also", nargs="*", default=[], help="more policy zips in the same report")
+    p.add_argument("policy", help="policy zip, ARS policy .npz, or a baseline name")
+    p.add_argument("--also", nargs="*", default=[], help="more policy zips / .npz in the same report")
     p.add_argument("--algo", default=None, help="algorithm of a zip without towenv metadata (ppo, sac, ...)")
     p.add_argument("--env", default=None, help="environment id (default: from the zip's metadata)")
     p.add_argument("--baselines", nargs="*", default=None, help="baselines to include (default: all of the env)")
@@ -204,7 +205,11 @@ def main(argv=None):
         if not path.is_file():
             _fail(f"{spec!r} is neither a file nor a baseline name ({', '.join(BASELINES)})")
         try:
-            pol = load_policy(path, algo=args.algo)
+            if path.suffix == ".npz":          # an ARS policy (agents/ars.py)
+                from agents.ars import load_ars_policy
+                pol = load_ars_policy(path)
+            else:
+                pol = load_policy(path, algo=args.algo)
         except Exception as e:      # not a zip, unknown algorithm, ...
             _fail(f"{spec}: cannot load the policy ({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})")
         meta = pol.meta

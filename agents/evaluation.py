@@ -124,7 +124,12 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
                 raise ValueError(f"{name}: environment keyword {k!r} = {kw.get(k)!r} differs from the "
                                  f"evaluation's ({env_kwargs.get(k)!r}); pass it with --env-kwargs")
         penv = make_eval_env(env_id, kw, meta.get("env_wrapper"))
+        if hasattr(pol, "bind_env"):        # a policy that reads the sea-state estimate (agents.ars.ARSPolicy)
+            pol.bind_env(penv)
         desc = f"{meta.get('algo', '?').upper()} policy"
+        if meta.get("algo") == "ars":
+            desc += (", linear residual on `along_cable` over the MRU along-cable history "
+                     f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
         for w in meta.get("env_wrapper") or []:
             if isinstance(w, dict):
                 for wn, wkw in w.items():

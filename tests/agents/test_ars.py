@@ -1,0 +1,139 @@
+"""ARS linear residual over the along-cable law (issue 14, agents/ars.py): θ = 0 is the along-cable law, the
+deployable single-environment policy acts exactly as the batched training rollout, it is causal (acts on the
+observations it was handed, not on the simulator), its file round-trips, training runs on the batched vector
+env, and scripts/evaluate.py takes the policy file."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+pytest.importorskip("stable_baselines3")
+
+import towenv  # noqa: E402,F401
+from agents import ars  # noqa: E402
+from agents.baselines import load_tuned, make_baseline  # noqa: E402
+from agents.common import nearest_key  # noqa: E402
+from agents.metrics import episode_metrics, rollout  # noqa: E402
+from helpers import load_script  # noqa: E402
+
+WINCH = "towenv/WinchPayout-v0"
+SECONDS = 30.0
+DISCARD = 10.0
+
+
+def _policy(scale=0.02, seed=0):
+    """An ARS policy with random (small) weights on the tuned along-cable table."""
+    table = load_tuned()["along_cable"]
+    rng = np.random.default_rng(seed)
+    theta = {k: rng.normal(0.0, scale, ars.N_FEATURES) for k in table}
+    return ars.ARSPolicy(theta, table, meta={"seed": seed, "iterations": 0})
+
+
+@pytest.fixture(scope="module")
+def env():
+    e = gym.make(WINCH, episode_seconds=SECONDS)
+    yield e
+    e.close()
+
+
+def test_zero_weights_are_the_along_cable_law(env):
+    pol = _policy(scale=0.0).bind_env(env)
+    sea, seed = env.unwrapped.eval_sea_states()[5]
+    a = rollout(env, pol, sea, seed + 123456)
+    b = rollout(env, make_baseline("along_cable", env), sea, seed + 123456)
+    assert np.array_equal(a.data["heave"], b.data["heave"])
+    assert np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
+
+
+def test_single_env_policy_equals_the_batched_training_rollout(env):
+    """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off."""
+    from towenv.envs.vector import WinchPayoutVectorEnv
+    pol = _policy(scale=0.02).bind_env(env)
+    ev = env.unwrapped.eval_sea_states()
+    picks = [0, 6, 11]                                  # one entry per sea state
+    seas = [ev[i][0] for i in picks]
+    seeds = [ev[i][1] + 123456 for i in picks]
+    venv = WinchPayoutVectorEnv(num_envs=3, autoreset_mode="NextStep", batch_infos=True, episode_seconds=SECONDS)
+    batch = ars._Batch(venv, pol.base_table, pol.scales)
+    theta = np.array([pol.theta[nearest_key(pol.theta, s)] for s in seas])
+    sh, sp = ars.rollout_batch(venv, batch, seas, seeds, theta, discard=DISCARD)
+    venv.close()
+    for i, (sea, s) in enumerate(zip(seas, seeds)):
+        m = episode_metrics(rollout(env, pol, sea, s), DISCARD)
+        assert m["rms_heave"] == pytest.approx(sh[i], rel=1e-9, abs=1e-12)
+        assert m["rms_pitch_deg"] == pytest.approx(sp[i], rel=1e-9, abs=1e-12)
+    # and the weights matter: the residual changes the heave
+    al = episode_metrics(rollout(env, make_baseline("along_cable", env), seas[1], seeds[1]), DISCARD)
+    assert abs(al["rms_heave"] - sh[1]) > 1e-6
+
+
+def test_policy_is_causal(env):
+    """The actions depend only on the observations handed to predict() (and the sea-state estimate): replaying
+    a recorded observation sequence to a fresh policy bound to another environment, whose simulator is in an
+    unrelated state, gives the same actions; changing a *later* observation leaves earlier actions unchanged."""
+    pol = _policy(scale=0.05).bind_env(env)
+    sea, seed = env.unwrapped.eval_sea_states()[2]
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    seq, acts = [], []
+    for k in range(60):
+        a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
+        seq.append(obs.copy())
+        acts.append(a.copy())
+        obs, *_ = env.step(a)
+    other = gym.make(WINCH, episode_seconds=SECONDS)
+    other.reset(seed=seed + 1, options={"sea_state": sea, "sea_seed": seed + 1})     # same sea state, other waves
+    for _ in range(17):
+        other.step(np.array([0.3], np.float32))
+    replay = _policy(scale=0.05).bind_env(other)
+    again = [replay.predict(o, episode_start=np.array([k == 0]))[0] for k, o in enumerate(seq)]
+    assert all(np.array_equal(x, y) for x, y in zip(acts, again))
+    changed = [o.copy() for o in seq]
+    changed[40] = changed[40] + 1.0
+    replay2 = _policy(scale=0.05).bind_env(other)
+    alt = [replay2.predict(o, episode_start=np.array([k == 0]))[0] for k, o in enumerate(changed)]
+    assert all(np.array_equal(x, y) for x, y in zip(acts[:40], alt[:40]))
+    assert not np.array_equal(acts[40], alt[40])
+    other.close()
+
+
+def test_policy_file_round_trip_and_refusal(tmp_path, env):
+    pol = _policy(scale=0.01, seed=3)
+    f = ars.save_policy(pol, tmp_path / "p.npz")
+    back = ars.load_ars_policy(f)
+    assert sorted(back.theta) == sorted(pol.theta)
+    assert all(np.array_equal(back.theta[k], pol.theta[k]) for k in pol.theta)
+    assert back.base_table == json.loads(json.dumps(pol.base_table))
+    assert back.meta["algo"] == "ars" and back.meta["env_id"] == WINCH
+    np.savez(tmp_path / "other.npz", x=np.zeros(3))
+    with pytest.raises(ValueError, match="not an ARS policy"):
+        ars.load_ars_policy(tmp_path / "other.npz")
+    with pytest.raises(RuntimeError, match="bind_env"):
+        _policy().predict(np.zeros(env.observation_space.shape, np.float32))
+
+
+def test_training_smoke_on_the_batched_env():
+    """One ARS iteration (1 direction, 120 s episodes) on the batched vector env: the weights move, the curve is
+    recorded, training wave seeds are not evaluation/final/validation/tuning seeds."""
+    pol = ars.train(seed=7, minutes=30.0, max_iterations=1, directions=1, top=1, episode_seconds=120.0,
+                    progress=False)
+    assert pol.meta["iterations"] == 1 and len(pol.meta["curve"]) == 1
+    assert pol.meta["curve"][0]["heave_ratio"] == pytest.approx(1.0)        # θ = 0 before the first step
+    assert any(np.linalg.norm(v) > 0 for v in pol.theta.values())
+    base = [s for _, s in gym.make(WINCH).unwrapped.eval_sea_states()]
+    reserved = {b + off for b in base for off in list(range(0, 500, 100)) + [500, 700, 900, 20000, 20100, 30000]}
+    used = {ars._train_seed(b, it, sd) for b in base for it in range(200) for sd in range(3)}
+    assert not used & reserved
+
+
+def test_evaluate_takes_an_ars_policy_file(tmp_path, monkeypatch, capsys):
+    evaluate = load_script("evaluate")
+    f = ars.save_policy(_policy(scale=0.01), tmp_path / "ars_test_s0.npz")
+    monkeypatch.chdir(tmp_path)
+    assert evaluate.main([str(f), "--episodes", "0", "--baselines", "fixed_winch", "along_cable", "--no-plots",
+                          "--env-kwargs", f"episode_seconds:{SECONDS}", "--discard", str(DISCARD)]) == 0
+    summary = json.loads((tmp_path / "runs" / "reports" / "ars_test_s0" / "summary.json").read_text())
+    assert "ars_test_s0" in json.dumps(summary)
+    assert "ARS policy" in (tmp_path / "runs" / "reports" / "ars_test_s0" / "report.md").read_text()
