@@ -300,9 +300,12 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
                 f"this step vs along_cable on {len(ev)} fresh training episodes: heave {100 * (pooled_h - 1):+6.2f} %, "
                 f"pitch {100 * (pooled_p - 1):+5.1f} %; |step| {', '.join(f'{s:.4f}' for s in steps)}")
         it += 1
+    steps_per_episode = int(venv.envs[0].max_steps)
     venv.close()
+    wall = time.perf_counter() - t_start
     meta = {"algo": "ars", "env_id": ENV_ID, "env_kwargs": {}, "seed": int(seed), "iterations": it,
-            "wall_seconds": time.perf_counter() - t_start,
+            "num_timesteps": it * n_copies * steps_per_episode, "wall_seconds": wall,
+            "wall_seconds_this_session": round(wall),
             "hyperparameters": {"directions": K, "top": top, "nu": nu, "alpha": alpha, "pitch_weight": pitch_weight,
                                 "episode_seconds": episode_seconds, "minutes": minutes,
                                 "max_iterations": max_iterations, "fail_penalty": fail_penalty},
