@@ -139,22 +139,17 @@ def features_single(reader, obs, scales, hist):
 
 # ============================================================================ batched rollouts (training)
 class _Batch:
-    """The along-cable law and the features for a batch of observations (same arithmetic as the single-env
-    :class:`ARSPolicy`: observation float32 → float64 × channel scale, then the law)."""
+    """The along-cable law (``classical.along_cable_velocity``, shared with the single-env baseline) and the
+    features for a batch of observations (observation float32 → float64 × channel scale, as ``ObsReader``)."""
 
     def __init__(self, venv, base_table: dict, scales: dict):
         self.reader = ObsReader(venv.envs[0])
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales
-        self.col = {}
-        for ch in set(HISTORY_CHANNELS) | set(INSTANT_CHANNELS):
-            sl, sc, _vec = self.reader._slices[ch]
-            self.col[ch] = (sl.start, sc)
 
     def ch(self, obs, name):
-        j, sc = self.col[name]
-        return obs[:, j].astype(float) * sc
+        return self.reader.batch(obs, name)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_ALONG_GAINS
@@ -162,11 +157,10 @@ class _Batch:
                            for s in seas])
 
     def base_action(self, obs):
-        g_ff, tau, kl, kp, kd = (self.G[:, k] for k in range(5))
-        ff = g_ff * (self.ch(obs, "tow_vel_along") + tau * self.ch(obs, "tow_acc_along"))
-        centre = -kl * (self.ch(obs, "winch_length_dev") - g_ff * self.ch(obs, "tow_disp_along"))
-        fb = kp * self.ch(obs, "fish_heave_dev") + kd * self.ch(obs, "fish_heave_rate")
-        return np.minimum(np.maximum((ff + centre + fb) / self.vmax, -1.0), 1.0)
+        from .classical import AlongCableWinch, along_cable_velocity
+        v = along_cable_velocity(*(self.G[:, k] for k in range(5)),
+                                 *(self.ch(obs, c) for c in AlongCableWinch.CHANNELS))
+        return np.minimum(np.maximum(v / self.vmax, -1.0), 1.0)
 
     def features(self, obs, first: bool):
         n = obs.shape[0]

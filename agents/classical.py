@@ -36,13 +36,23 @@ import numpy as np
 from .baselines import Baseline
 from .common import nearest_key
 
-__all__ = ["AlongCableWinch", "SkyhookCompensator", "DEFAULT_ALONG_GAINS", "DEFAULT_SKYHOOK_GAINS"]
+__all__ = ["AlongCableWinch", "along_cable_velocity", "SkyhookCompensator", "DEFAULT_ALONG_GAINS", "DEFAULT_SKYHOOK_GAINS"]
 
 #: gains used when no tuned table exists (plain along-cable cancellation with weak centring/feedback)
 DEFAULT_ALONG_GAINS = {"g_ff": 1.0, "tau": 0.1, "kl": 0.05, "kp": 0.2, "kd": 0.1}
 #: skyhook gains used when no tuned table exists: c_sky (N s/m), b0 floor damping (N s/m), k0 spring (N/m),
 #: margin (fraction of the half stroke), k_stop (N/m)
 DEFAULT_SKYHOOK_GAINS = {"c_sky": 5000.0, "b0": 1000.0, "k0": 1000.0, "margin": 0.3, "k_stop": 50000.0}
+
+
+def along_cable_velocity(g_ff, tau, kl, kp, kd, v_al, a_al, d_al, dL, h, hd):
+    """The along-cable law (module docstring), payout speed in m/s; element-wise, so the same arithmetic serves
+    one observation (floats) and a batch (arrays, ``agents.ars``). Arguments in :attr:`AlongCableWinch.CHANNELS`
+    order after the gains."""
+    ff = g_ff * (v_al + tau * a_al)
+    centre = -kl * (dL - g_ff * d_al)
+    fb = kp * h + kd * hd
+    return ff + centre + fb
 
 
 class AlongCableWinch(Baseline):
@@ -75,10 +85,7 @@ class AlongCableWinch(Baseline):
     def velocity(self, obs, g: dict | None = None) -> float:
         r = self.reader
         g = self.g if g is None else g
-        ff = g["g_ff"] * (r(obs, "tow_vel_along") + g["tau"] * r(obs, "tow_acc_along"))
-        centre = -g["kl"] * (r(obs, "winch_length_dev") - g["g_ff"] * r(obs, "tow_disp_along"))
-        fb = g["kp"] * r(obs, "fish_heave_dev") + g["kd"] * r(obs, "fish_heave_rate")
-        return ff + centre + fb
+        return along_cable_velocity(g["g_ff"], g["tau"], g["kl"], g["kp"], g["kd"], *(r(obs, c) for c in self.CHANNELS))
 
     def act(self, obs):
         return np.array([min(max(self.velocity(obs) / self.vmax, -1.0), 1.0)])

@@ -64,6 +64,14 @@ class ObsReader:
         v = o[sl] * scale
         return v if vec else float(v[0])
 
+    def batch(self, obs, name: str) -> np.ndarray:
+        """A scalar channel for a batch of observations ``(n, size)``: ``(n,)`` float64 in physical units (the
+        same arithmetic as :meth:`__call__` row by row)."""
+        sl, scale, vec = self._slices[name]
+        if vec:
+            raise ValueError(f"batch(): channel {name!r} is a vector channel")
+        return np.asarray(obs)[:, sl.start].astype(float) * scale
+
 
 def sea_key(sea) -> str:
     """A stable text key of a sea state: ``"hs1.88_tp5.90"`` (heading not included: the baselines are
