@@ -26,6 +26,29 @@ meaningful on the machine that made the file. The file therefore records :func:`
 numba, llvmlite, numpy, scipy); the test demands bit-identity when the fingerprint matches and round-off
 agreement otherwise.
 
+Regenerated a fourth time (2026-12-02, issue 16) when the kernels stopped compiling with fast-math
+(``towenv/core/jit.py``: with reassociation allowed, the last bits depended on how LLVM inlined a kernel, and
+so on whether it was compiled in the process or loaded from numba's cache). Without fast-math the compiled
+arithmetic is exactly the source's, so the recipe must now reproduce two deliberate round-off changes made
+since the file was first written, which fast-math had happened to absorb or which no test machine had
+checked bit for bit:
+
+* the statics' Morison drag is the kernels' shared helper (issue 16, "one Morison drag"): in the 299a4cc
+  checkout, ``statics._segment_drag`` returns ``cable_loads.morison_drag`` (``relative_velocity_parts`` and
+  ``morison_force`` copied verbatim, compiled with the checkout's ``njit``) instead of its numpy expression;
+* the Simulator's tow-point positions come from the phase-recurrence buffer (issue 15,
+  ``towenv.core.tow_point``; ≤ 1e-9 m from the exact sum): the old kernel is fed the current code's tow-point
+  positions, exported first from this worktree.
+
+and the 299a4cc checkout's ``_FASTMATH`` set to ``False``. The recipe is therefore two commands::
+
+    python tests/data/make_houbolt_reference.py --export-tow-points /tmp/tow_points.npz
+    cd <patched 299a4cc checkout> && PYTHONPATH=. python <this worktree>/tests/data/make_houbolt_reference.py \
+        --tow-points /tmp/tow_points.npz
+
+Against the third file: positions ≤ 9.4e-10 m, angles ≤ 4e-11 rad, tensions ≤ 6.1e-6 N (of ~3e4) — round-off
+and Newton-tolerance level; the current kernel reproduces the new file bit for bit.
+
 Do not regenerate it with a changed kernel unless the change is meant to alter the results.
 """
 from pathlib import Path
@@ -69,9 +92,43 @@ def run(scene, overrides, steps):
     return sim
 
 
-def main():
+def export_tow_points(path):
+    """Write the current code's tow-point positions of every case (steps 0 … steps + 4096)."""
     out = {}
     for scene, (ov, steps) in CASES.items():
+        sim = towenv.Simulator(hover_ss6_locked_cg() if scene == "hover_ss6_locked_cg" else scene, **ov)
+        out[scene] = sim._tow_points(0, steps + 4096)
+    np.savez(path, **out)
+    print("wrote", path)
+
+
+def use_tow_points(path):
+    """Make the (old) Simulator read its tow-point positions from ``path`` (see the module docstring)."""
+    from towenv.core.simulator import Simulator
+    stored = np.load(path)
+    Simulator._reference_tow_points = None
+
+    def _tow_points(self, first, n):
+        return Simulator._reference_tow_points[first:first + n].copy()
+    Simulator._tow_points = _tow_points
+    return stored
+
+
+def main():
+    import argparse
+    ap = argparse.ArgumentParser(description="regenerate houbolt_reference.npz (see the module docstring)")
+    ap.add_argument("--export-tow-points", metavar="NPZ")
+    ap.add_argument("--tow-points", metavar="NPZ")
+    a = ap.parse_args()
+    if a.export_tow_points:
+        export_tow_points(a.export_tow_points)
+        return
+    stored = use_tow_points(a.tow_points) if a.tow_points else None
+    out = {}
+    for scene, (ov, steps) in CASES.items():
+        if stored is not None:
+            from towenv.core.simulator import Simulator
+            Simulator._reference_tow_points = stored[scene]
         sim = run(scene, ov, steps)
         out[f"{scene}::hist_r"] = sim.hist_r.copy()
         out[f"{scene}::hist_ang"] = sim.hist_ang.copy()

@@ -21,6 +21,17 @@ tuple with the loop variable, which measured 3 % slower per step than the inline
 paired runs), and now selects them instead — same formula, last bits moved again. Against the cbf06b3 file:
 flags and info texts identical, largest difference 4.5e-10 (in rewards of ~6000); against the first
 regeneration 9.2e-10 (rewards of ~99).
+Regenerated a third time when ``houbolt_step`` was split into phase functions compiled without reference
+counting (issue 16, item 2) and the cable loops' current lookup became ``cable_loads.current_xyz`` (three
+numbers instead of a scratch array): same operations, but fast-math contraction now sees them in other
+functions. Against the previous file: flags and info texts identical, largest differences 5.8e-11 in
+observations (of ~1) and 4e-10 in rewards (of ~99); against the cbf06b3 file ≤ 4.5e-10 (rewards of ~6000).
+The Houbolt attitude reference stayed bit-identical.
+Regenerated a fourth time when the kernels stopped compiling with fast-math (``towenv/core/jit.py``: with
+reassociation allowed, a first, compiling run and a second, cache-loading run of the same code gave different
+last bits, ~1e-11 relative, once the Houbolt step was split into phases). Against the previous file: flags and
+info texts identical, largest differences 5.8e-11 in observations (of ~1), 3.3e-11 in rewards (of ~1).
+Without fast-math the same file is reproduced by a fresh compile and by a cached run (tests/unit/test_jit_cache.py).
 
 As for ``houbolt_reference.npz``, numba compiles for the host CPU: the file records :func:`fingerprint`
 and the comparison is bit for bit when it matches, to round-off otherwise.

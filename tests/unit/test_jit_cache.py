@@ -1,5 +1,7 @@
 """Numba's cache checks only the compiled function's own file; towenv.core.jit drops the package's cached
 kernels when any kernel module's source changed (a kernel compiled against an older callee must not load)."""
+import pytest
+
 from towenv.core import jit
 
 
@@ -35,3 +37,36 @@ def test_the_installed_package_has_a_current_stamp():
     stamp = root / "core" / "__pycache__" / jit.STAMP_NAME
     if stamp.exists():
         assert stamp.read_text().strip() == jit.kernel_sources_digest(root)
+
+
+_DIGEST_RUN = """
+import hashlib, numpy as np, towenv
+sim = towenv.make_simulator("two_part_coastal_ss4", dt=0.05)
+sim.advance_steps(200)
+h = hashlib.sha1()
+for a in (sim.positions, sim.velocities, sim.tensions):
+    h.update(np.ascontiguousarray(a).tobytes())
+print(h.hexdigest())
+"""
+
+
+@pytest.mark.slow
+def test_a_compiling_run_and_a_cached_run_give_the_same_bits(tmp_path):
+    """Determinism across processes: a run that compiles the kernels (empty numba cache) and a run that loads
+    them from the cache give the same trajectory bit for bit. With fast-math (reassociation) this failed once
+    the Houbolt step was split into phase functions: numba links a callee's code into each caller and
+    re-optimises it there, and which copy a call reached depended on compile-versus-load (jit.py)."""
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    runs = []
+    for _ in range(2):
+        p = subprocess.run([sys.executable, "-P", "-c", _DIGEST_RUN], env=env, capture_output=True, text=True,
+                           timeout=900)
+        assert p.returncode == 0, p.stderr[-2000:]
+        runs.append(p.stdout.strip().splitlines()[-1])
+        if len(runs) == 1:                       # the first run compiled and wrote the cache
+            assert list((tmp_path / "cache").rglob("*.nbi")), "the first run wrote no numba cache"
+    assert runs[0] == runs[1]
+    assert jit.FASTMATH is False

@@ -132,3 +132,20 @@ def test_one_morison_drag_for_kernels_statics_and_linearisation():
                      if "* avt * vt" in p.read_text() or "abs(vt) * vt" in p.read_text())
     assert writers == ["core/cable_loads.py", "verification/twin.py"], writers
     assert eqlin.morison_drag is cable_loads.morison_drag and eqlin.morison_damping is cable_loads.morison_damping
+
+
+def test_houbolt_step_is_split_into_phases_compiled_without_reference_counting():
+    """Issue 16 item 2: houbolt_step is a driver of phase functions. They run without numba's reference
+    counting: with it, the phases measured 11-45 % slower per step than the single function they replaced
+    (docs/architecture.md), so losing the flag would be a silent speed loss."""
+    from towenv.core import houbolt
+    phases = ("actuator_lag", "predict", "iterate_coefficients", "node_local_solve", "tension_system",
+              "tension_apply", "body_angle_update", "end_stop_contact", "commit")
+    driver = inspect.getsource(houbolt.houbolt_step.py_func)
+    for name in phases + ("houbolt_step",):
+        f = getattr(houbolt, name)
+        assert f.targetoptions.get("_nrt") is False, name
+    for name in phases:
+        assert f"{name}(" in driver, name
+    # the driver holds no per-node or per-segment loop of its own: the work is in the phases
+    assert "range(nn)" not in driver and "range(ns)" not in driver

@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .jit import njit
 
 
@@ -31,6 +29,24 @@ def current_at(z, cur_z, cur_v, out):
     f = (depth - cur_z[i]) / (cur_z[i + 1] - cur_z[i])
     for k in range(3):
         out[k] = cur_v[i, k] * (1.0 - f) + cur_v[i + 1, k] * f
+
+
+@njit(cache=True)
+def current_xyz(z, cur_z, cur_v):
+    """:func:`current_at` returned as three numbers (no array: the kernels called once per Newton iteration
+    run without numba's reference counting, which forbids allocating)."""
+    n = cur_z.shape[0]
+    depth = -z
+    if n == 1 or depth <= cur_z[0]:
+        return cur_v[0, 0], cur_v[0, 1], cur_v[0, 2]
+    if depth >= cur_z[n - 1]:
+        return cur_v[n - 1, 0], cur_v[n - 1, 1], cur_v[n - 1, 2]
+    i = 0
+    while cur_z[i + 1] < depth:
+        i += 1
+    f = (depth - cur_z[i]) / (cur_z[i + 1] - cur_z[i])
+    return (cur_v[i, 0] * (1.0 - f) + cur_v[i + 1, 0] * f, cur_v[i, 1] * (1.0 - f) + cur_v[i + 1, 1] * f,
+            cur_v[i, 2] * (1.0 - f) + cur_v[i + 1, 2] * f)
 
 
 @njit(cache=True)
@@ -108,7 +124,6 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
     ``node_assembly``.
     """
     nseg = seg_lo.shape[0]
-    vc = np.empty(3)
     for s in range(nseg):
         a = seg_lo[s]
         b = seg_up[s]
@@ -132,10 +147,10 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
         kt = 0.5 * rho * ct[s] * diam[s] * l0[s]
         for e in range(2):
             nd = a if e == 0 else b
-            current_at(r[nd, 2], cur_z, cur_v, vc)
-            vr0 = v[nd, 0] - vc[0]
-            vr1 = v[nd, 1] - vc[1]
-            vr2 = v[nd, 2] - vc[2]
+            vc0, vc1, vc2 = current_xyz(r[nd, 2], cur_z, cur_v)
+            vr0 = v[nd, 0] - vc0
+            vr1 = v[nd, 1] - vc1
+            vr2 = v[nd, 2] - vc2
             vt_mag, vn0, vn1, vn2, vn_abs = relative_velocity_parts(vr0, vr1, vr2, t0, t1, t2)
             d0, d1, d2 = morison_force(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt)
             drag[s, e, 0] = d0
@@ -161,7 +176,6 @@ def node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu,
     mass + added mass (isotropic), wet weight and isotropic quadratic drag ``-½ρ CdA |v_r| v_r``.
     """
     nn = node_kind.shape[0]
-    vc = np.empty(3)
     for a in range(nn):
         for i in range(3):
             fnode[a, i] = 0.0
@@ -187,10 +201,10 @@ def node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu,
                 mnode[a, i, i] += mtot
             fnode[a, 2] -= (pb_mass[a] - rho * pb_vol[a]) * g
             if pb_cda[a] > 0.0:
-                current_at(r[a, 2], cur_z, cur_v, vc)
-                v0 = v[a, 0] - vc[0]
-                v1 = v[a, 1] - vc[1]
-                v2 = v[a, 2] - vc[2]
+                vc0, vc1, vc2 = current_xyz(r[a, 2], cur_z, cur_v)
+                v0 = v[a, 0] - vc0
+                v1 = v[a, 1] - vc1
+                v2 = v[a, 2] - vc2
                 vm = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
                 kd = 0.5 * rho * pb_cda[a]
                 fnode[a, 0] -= kd * vm * v0

@@ -26,20 +26,22 @@ from .tension_solve import (_positions_from_tensions, assemble_tension_system, t
                             tree_ldlt_solve)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
-    Phases (each marked ``# ---`` below): actuator lag and predictor; then per Newton iteration the loads at
-    the iterate (cable segments, node assembly, rigid bodies condensed onto their tow-point nodes), the
-    node-local solve of every free node, the Newton update of the tensions on the tree, the body-angle
-    update and the convergence test; then the end-stop contact check and the commit. The phases stay in one
-    compiled function on purpose: split into separate njit functions they measured 25–40 % slower per step
-    (two_part_tow_1, Δt 0.05 s: 25–28 µs against 20 µs; with numba's ``inline="always"`` no better, and
-    with explicit array arguments it does not compile). The likely cause, measured: numba takes and releases a
-    reference on every array it reads out of a structure or receives as an argument, and re-reading the
-    work structure's fields once per Newton iteration inside this function alone made the 1 km turn
-    25–45 % slower — so phases called per iteration pay that on every call.
+    The step in its phases, each a compiled function of its own below: :func:`actuator_lag` and
+    :func:`predict`; then per Newton iteration :func:`iterate_coefficients` (the loads at the iterate: cable
+    segments, node assembly, rigid bodies condensed onto their tow-point nodes), :func:`node_local_solve`
+    (every free node's 3×3 solve), :func:`tension_system`, the tree solve of the tension update and
+    :func:`tension_apply`, :func:`body_angle_update`, and the convergence test; then :func:`end_stop_contact`
+    and :func:`commit`.
+
+    The step and its phases are compiled without numba's reference counting (``_nrt=False``; nothing they
+    call allocates — the as-published recursion works in ``ws.recursion``). With it, numba takes and
+    releases a reference on every array a function receives or reads out of a structure: the phases, called
+    a few times per Newton iteration with 10–75 arrays each, measured 11–45 % slower per step than the
+    single function they came from; without it they are 6–12 % faster than it (docs/architecture.md).
 
     On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
     solution lives in the work arrays), so the caller can retry with a smaller step.
@@ -56,6 +58,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     maxit = int(settings[S_MAX_ITERATIONS])
     max_strain = settings[S_MAX_STRAIN]
     ang_tol = settings[S_ANGLE_TOLERANCE]
+    as_published = settings[S_AS_PUBLISHED] == 1.0
     # 2-D vertical-plane model (solver.planar): lateral node DOF and body roll/yaw frozen
     planar = settings.shape[0] > S_PLANAR and settings[S_PLANAR] != 0.0
     # Newton stopping on the estimated remaining error (solver.newton_stop = "estimate")
@@ -71,42 +74,16 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     atr, arr, arrinv, cur_b, fb, mb, bdiag = ws.atr, ws.arr, ws.arrinv, ws.cur_b, ws.fb, ws.mb, ws.bdiag
     react, bkc, bdmat, scr, flow = ws.react, ws.bkc, ws.bdmat, ws.scr, ws.flow
 
-    nn = node_kind.shape[0]
-    ns = l0.shape[0]
     nb = body_node.shape[0]
     r_t = hist_r[0]
     r_tm1 = hist_r[1]
     r_tm2 = hist_r[2]
-    c11 = 11.0 * dt / 12.0
-    hdt2 = 0.5 * dt * dt
-    i6dt = 1.0 / (6.0 * dt)
-    idt2 = 1.0 / (dt * dt)
 
     cmode = int(comp[C_MODE])
     cnode = int(comp[C_NODE])
-    act_new = cstate[CS_ACT]
-    if cmode == COMP_POSITION or cmode == COMP_FORCE:
-        # first-order actuator lag with a rate limit (explicit, once per step)
-        rate = (comp[C_CMD] - cstate[CS_ACT]) / max(comp[C_TAU], dt)
-        if rate > comp[C_RATE]:
-            rate = comp[C_RATE]
-        elif rate < -comp[C_RATE]:
-            rate = -comp[C_RATE]
-        act_new = cstate[CS_ACT] + dt * rate
-
-    # predictor
-    for a in range(nn):
-        for i in range(3):
-            rs[a, i] = 3.0 * r_t[a, i] - 3.0 * r_tm1[a, i] + r_tm2[a, i]
-    for i in range(3):
-        rs[top_node, i] = r_top_new[i]
-    for b in range(nb):
-        for i in range(3):
-            angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
-    place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
-    for s in range(ns):
-        tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
-        tens[s] = tp if tp > 0.0 else 0.0
+    act_new = actuator_lag(dt, comp, cmode, cstate)
+    predict(top_node, r_top_new, hist_r, hist_ang, tens_hist, chart, body_node, body_aft_node, bp, rs, angs, tens,
+            tmp33)
 
     # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
     any_aft = False
@@ -118,212 +95,42 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     it = 0
     maxd = 0.0
     for it in range(1, maxit + 1):
-        # --- coefficients at the current iterate -------------------------------------------------
-        for a in range(nn):
-            for i in range(3):
-                # velocity relative to the wave orbital flow (zero unless [sea] orbital_velocities is on);
-                # the current is subtracted where each load is evaluated
-                vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt \
-                    - flow[a, i]
-        segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
-                      tang, stretched, drag, bmat, madd)
-        node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
-                      pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode)
-        for b in range(nb):
-            a = body_node[b]
-            for i in range(3):
-                dang[b, i] = (11.0 * angs[b, i] - 18.0 * hist_ang[0, b, i] + 9.0 * hist_ang[1, b, i]
-                              - 2.0 * hist_ang[2, b, i]) * i6dt
-            lam = blam[b]
-            _chart_rotation(angs[b, 0], angs[b, 1], angs[b, 2], chart, b, lam)
-            euler_rates_to_omega(angs[b], dang[b], omg[b])
-            w = omg[b]
-            for i in range(3):
-                tmp3[i] = lam[i, 0] * vs[a, 0] + lam[i, 1] * vs[a, 1] + lam[i, 2] * vs[a, 2]
-            zc = rs[a, 2] + lam[0, 2] * bp[b, BP_CB] + lam[1, 2] * bp[b, BP_CB + 1] + lam[2, 2] * bp[b, BP_CB + 2]
-            current_at(zc, cur_z, cur_v, cur_b)
-            body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
-            reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
-            if it == 1:
-                _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33,
-                                      reduced)
-                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
-            c = body_aft_node[b]
-            if c >= 0:
-                node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
-                              mnode, fnode, react)
-            if not _condense(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
-                             tmp33b, bX[b], by[b], mnode, fnode, reduced):
-                return FAIL_NAN, it, -1, 0.0
-            for i in range(3):
-                bkc[b, BK_INERTIA + i] = arr[i, i]
-            # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
-            for i in range(3):
-                for j in range(3):
-                    sacc = 0.0
-                    for k in range(3):
-                        for m in range(3):
-                            sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
-                    bnode[a, i, j] += sacc
-        if it == 1 and any_aft:
-            # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
-            for b in range(nb):
-                c = body_aft_node[b]
-                if c >= 0:
-                    aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
-                                             stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc)
-        # --- node-local solve: r_a = A_a + Σ σ T q_a,k ------------------------------------------
-        for a in range(nn):
-            if node_kind[a] == COMPENSATOR:
-                _compensator_node(a, int(comp[C_SHIP]), comp, cmode, act_new, dt, rs, r_t, r_tm1, r_tm2, node_nseg,
-                                  node_segs, tang, stretched, tens, mnode, bnode, fnode, acon, qvec)
-                continue
-            if node_kind[a] != FREE:
-                continue
-            # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
-            # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
-            # both sides, so they change the convergence rate only, never the converged solution.
-            for i in range(3):
-                for j in range(3):
-                    kg = 0.0
-                    for k in range(node_nseg[a]):
-                        sk = node_segs[a, k]
-                        if stretched[sk] > 0.0:
-                            kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
-                    att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
-                    tmp33[i, j] = mnode[a, i, j] + att[i, j]
-            # a body towing a tail from its aft tow point: the tail's pull is a load on the body inside the
-            # Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ +
-            # T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness)
-            for b in range(nb if any_aft else 0):
-                c = body_aft_node[b]
-                if body_node[b] != a or c < 0:
-                    continue
-                for k in range(node_nseg[c]):
-                    sk = node_segs[c, k]
-                    kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
-                    if kax == 0.0 and kgeo == 0.0:
-                        continue
-                    for i in range(3):
-                        for j in range(3):
-                            tt = tang[sk, i] * tang[sk, j]
-                            add = hdt2 * (kax * tt + kgeo * ((1.0 if i == j else 0.0) - tt))
-                            att[i, j] += add
-                            tmp33[i, j] += add
-            if not _inv3(tmp33, tmp33b):
-                return FAIL_NAN, it, a, 0.0
-            for j in range(3):
-                hvec[j] = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
-            for i in range(3):
-                hi = 0.0
-                for j in range(3):
-                    hi += mnode[a, i, j] * hvec[j] + att[i, j] * rs[a, j]
-                tmp3[i] = hi + hdt2 * fnode[a, i]
-            for i in range(3):
-                acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
-            for k in range(node_nseg[a]):
-                s = node_segs[a, k]
-                for i in range(3):
-                    qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
-                                            + tmp33b[i, 2] * tang[s, 2])
-
-        if planar:
-            # vertical-plane model: free nodes hold their lateral coordinate. The scenes it accepts have no
-            # x–y or y–z coupling in M̃ (no lateral tangent, velocity or body asymmetry), so the (x, z) rows
-            # of the 3-D solve are the plane's own solve (a separate 2×2 path measured slower)
-            for a in range(nn):
-                if node_kind[a] == FREE:
-                    acon[a, 1] = r_t[a, 1]
-                    for k in range(node_nseg[a]):
-                        qvec[a, k, 1] = 0.0
-        # positions at the current tensions, and residuals
-        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
-        place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
-        tmax = 0.0
-        for s in range(ns):
-            p = seg_lo[s]
-            q = seg_up[s]
-            dx = rs[q, 0] - rs[p, 0]
-            dy = rs[q, 1] - rs[p, 1]
-            dz = rs[q, 2] - rs[p, 2]
-            ell = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if math.isinf(ea[s]):
-                gres[s] = ell - l0[s]
-            else:
-                gres[s] = ell - l0[s] * (1.0 + tens[s] / ea[s])
-            if tens[s] > tmax:
-                tmax = tens[s]
-        # --- Newton update of the tensions ----------------------------------------------------
-        assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qvec, l0, ea, tens, kd, kb)
-        for s in range(ns):
-            rhs[s] = gres[s]
-            if tens[s] <= 0.0 and gres[s] < 0.0:
-                # slack segment: hold T = 0 (row and column replaced by identity)
-                kd[s] = 1.0
-                rhs[s] = -tens[s]
-                for e in range(2):
-                    a = seg_lo[s] if e == 0 else seg_up[s]
-                    for k in range(node_nseg[a]):
-                        if node_segs[a, k] == s:
-                            for k2 in range(node_nseg[a]):
-                                kb[a, k, k2] = 0.0
-                                kb[a, k2, k] = 0.0
-        if settings[S_AS_PUBLISHED] == 1.0:
+        # --- coefficients at the current iterate
+        bad = iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, flow, seg_lo, seg_up,
+                                   node_kind, node_nseg, node_segs, node_sgn, body_node, body_aft_node, l0, diam, mu,
+                                   cn, ct, can, cat, ea, bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g,
+                                   cur_z, cur_v, chart, rs, vs, angs, tang, stretched, drag, bmat, madd, mnode, bnode,
+                                   fnode, tens, dang, blam, omg, tmp3, cur_b, fb, mb, bdiag, bkc, scr, tmp33, bdmat,
+                                   react, att, atr, arr, arrinv, hvec, tmp33b, bX, by)
+        if bad:
+            return FAIL_NAN, it, -1, 0.0
+        # --- node-local solve: r_a = A_a + Σ σ T q_a,k
+        a_bad = node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind,
+                                 node_nseg, node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens,
+                                 mnode, bnode, fnode, acon, qvec, att, tmp33, tmp33b, hvec, tmp3)
+        if a_bad >= 0:
+            return FAIL_NAN, it, a_bad, 0.0
+        # --- positions at the current tensions, residuals, Newton update of the tensions
+        tmax = tension_system(seg_lo, seg_up, node_kind, node_nseg, node_segs, node_sgn, l0, ea, tang, qvec, acon,
+                              tens, rs, angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb)
+        if as_published:
             if not thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, dT,
-                                          gres):
+                                          gres, ws.recursion):
                 return FAIL_NEWTON, it, -1, 0.0
-        elif not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb,
-                                 rhs, dT):
+        elif not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb, rhs, dT):
             return FAIL_NEWTON, it, -1, 0.0
-        maxd = 0.0
-        elem = -1
-        any_slack = False
-        for s in range(ns):
-            tn = tens[s] + dT[s]
-            if tn < 0.0:
-                tn = 0.0
-            if tn <= 0.0:
-                any_slack = True
-            d = abs(tn - tens[s])
-            if not (d <= maxd):     # also catches NaN
-                maxd = d
-                elem = s
-            tens[s] = tn
+        elem, maxd, any_slack = tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, tens, rs)
         if not math.isfinite(maxd):
             return FAIL_NAN, it, elem, maxd
-        # positions with the updated tensions (same coefficients)
-        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
-        # --- body rotations: ω̇ = A_rr⁻¹(M − A_rt a), Houbolt on the Euler angles -------------------
-        dang_max = 0.0
-        for b in range(nb):
-            a = body_node[b]
-            lam = blam[b]
-            for i in range(3):
-                tmp3[i] = (2.0 * rs[a, i] - 5.0 * r_t[a, i] + 4.0 * r_tm1[a, i] - r_tm2[a, i]) * idt2
-            for i in range(3):
-                hvec[i] = lam[i, 0] * tmp3[0] + lam[i, 1] * tmp3[1] + lam[i, 2] * tmp3[2]
-            for i in range(3):
-                tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
-            omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
-            reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
-            for i in range(3):
-                if reduced and i != 1:
-                    angs[b, i] = hist_ang[0, b, i]      # roll and yaw held
-                    continue
-                na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
-                # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
-                # of the fixed-point update that leaves the converged solution unchanged
-                na = angs[b, i] + (na - angs[b, i]) / (
-                    1.0 + (hdt2 * bkc[b, BK_STIFFNESS + i] + c11 * bkc[b, BK_DAMPING + i]) / bkc[b, BK_INERTIA + i])
-                dd = abs(na - angs[b, i])
-                if not (dd <= dang_max):
-                    dang_max = dd
-                angs[b, i] = na
-            if abs(angs[b, 1]) > PITCH_LIMIT:     # ~85 deg in the chart: only if re-charting (advance) could not keep up
-                return FAIL_ANGLE, it, b, maxd
+        # --- body rotations: ω̇ = A_rr⁻¹(M − A_rt a), Houbolt on the Euler angles
+        b_bad, dang_max = body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, omg, blam,
+                                            body_node, bp, bX, by, bkc, tmp3, hvec)
+        if b_bad >= 0:
+            return FAIL_ANGLE, it, b_bad, maxd
         if not math.isfinite(dang_max):
             return FAIL_NAN, it, -1, maxd
         place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
+        # --- convergence test
         tol_t = tol_abs + tol_rel * tmax
         if maxd <= tol_t and dang_max <= ang_tol:
             status = OK
@@ -342,31 +149,347 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         prev_a = dang_max
     if status != OK:
         return status, it, elem, maxd
-    # --- end-stop contact: exact (the sheave is held at the stop while the stop pushes) --------------
+    # --- end-stop contact: exact (the sheave is held at the stop while the stop pushes)
     if cmode == COMP_PASSIVE or cmode == COMP_FORCE:
-        z_new = rs[cnode, 2] - rs[top_node, 2]
-        trial = comp[C_TRIAL]
-        if trial == 0.0:
-            if z_new > comp[C_SMAX]:
-                comp[C_TRIAL] = 1.0
-                return RETRY_CONTACT, it, cnode, maxd
-            if z_new < comp[C_SMIN]:
-                comp[C_TRIAL] = -1.0
-                return RETRY_CONTACT, it, cnode, maxd
+        if end_stop_contact(dt, top_node, cnode, comp, r_t, r_tm1, r_tm2, rs, node_nseg, node_segs, node_sgn, tang,
+                            tens, mnode, fnode):
+            return RETRY_CONTACT, it, cnode, maxd
+    # --- checks and commit
+    bad_kind, bad_elem = commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, tens, rs, angs,
+                                r_t, r_tm1, r_tm2, hist_r, hist_ang, tens_hist, top_react, react, node_nseg, node_segs,
+                                node_sgn, tang, mnode, fnode)
+    if bad_kind != OK:
+        return bad_kind, it, bad_elem, maxd
+    return OK, it, -1, maxd
+
+
+@njit(cache=True, _nrt=False)
+def actuator_lag(dt, comp, cmode, cstate):
+    """The compensator actuator's command after this step: first-order lag with a rate limit (explicit, once per
+    step) in position/force mode; its current value otherwise."""
+    act_new = cstate[CS_ACT]
+    if cmode == COMP_POSITION or cmode == COMP_FORCE:
+        rate = (comp[C_CMD] - cstate[CS_ACT]) / max(comp[C_TAU], dt)
+        if rate > comp[C_RATE]:
+            rate = comp[C_RATE]
+        elif rate < -comp[C_RATE]:
+            rate = -comp[C_RATE]
+        act_new = cstate[CS_ACT] + dt * rate
+    return act_new
+
+
+@njit(cache=True, _nrt=False)
+def predict(top_node, r_top_new, hist_r, hist_ang, tens_hist, chart, body_node, body_aft_node, bp, rs, angs, tens,
+            tmp33):
+    """Predictor of the Newton iteration: positions and body angles extrapolated from the last three time levels
+    (cubic), the tow point at its new position, tensions extrapolated linearly (clamped at 0)."""
+    nn = rs.shape[0]
+    nb = body_node.shape[0]
+    ns = tens.shape[0]
+    for a in range(nn):
+        for i in range(3):
+            rs[a, i] = 3.0 * hist_r[0, a, i] - 3.0 * hist_r[1, a, i] + hist_r[2, a, i]
+    for i in range(3):
+        rs[top_node, i] = r_top_new[i]
+    for b in range(nb):
+        for i in range(3):
+            angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
+    place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
+    for s in range(ns):
+        tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
+        tens[s] = tp if tp > 0.0 else 0.0
+
+
+@njit(cache=True, _nrt=False)
+def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, flow, seg_lo, seg_up, node_kind,
+                         node_nseg, node_segs, node_sgn, body_node, body_aft_node, l0, diam, mu, cn, ct, can, cat, ea,
+                         bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g, cur_z, cur_v, chart, rs, vs, angs,
+                         tang, stretched, drag, bmat, madd, mnode, bnode, fnode, tens, dang, blam, omg, tmp3, cur_b,
+                         fb, mb, bdiag, bkc, scr, tmp33, bdmat, react, att, atr, arr, arrinv, hvec, tmp33b, bX, by):
+    """Loads and their linearisations at the current iterate ``rs`` (Newton iteration ``it``): node velocities
+    (Houbolt, relative to the orbital flow), cable segment loads, node assembly, the rigid bodies' loads
+    condensed onto their tow-point nodes (their rotational stiffness and damping on the first iteration), and
+    for series tows the tail's restoring moment. Returns True when a body's condensation failed (NaN)."""
+    nn = rs.shape[0]
+    nb = body_node.shape[0]
+    i6dt = 1.0 / (6.0 * dt)
+    hdt2 = 0.5 * dt * dt
+    for a in range(nn):
+        for i in range(3):
+            # velocity relative to the wave orbital flow (zero unless [sea] orbital_velocities is on);
+            # the current is subtracted where each load is evaluated
+            vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt \
+                - flow[a, i]
+    segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
+                  tang, stretched, drag, bmat, madd)
+    node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
+                  pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode)
+    for b in range(nb):
+        a = body_node[b]
+        for i in range(3):
+            dang[b, i] = (11.0 * angs[b, i] - 18.0 * hist_ang[0, b, i] + 9.0 * hist_ang[1, b, i]
+                          - 2.0 * hist_ang[2, b, i]) * i6dt
+        lam = blam[b]
+        _chart_rotation(angs[b, 0], angs[b, 1], angs[b, 2], chart, b, lam)
+        euler_rates_to_omega(angs[b], dang[b], omg[b])
+        w = omg[b]
+        for i in range(3):
+            tmp3[i] = lam[i, 0] * vs[a, 0] + lam[i, 1] * vs[a, 1] + lam[i, 2] * vs[a, 2]
+        zc = rs[a, 2] + lam[0, 2] * bp[b, BP_CB] + lam[1, 2] * bp[b, BP_CB + 1] + lam[2, 2] * bp[b, BP_CB + 2]
+        current_at(zc, cur_z, cur_v, cur_b)
+        body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
+        reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
+        if it == 1:
+            _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33,
+                                  reduced)
+            _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
+        c = body_aft_node[b]
+        if c >= 0:
+            node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
+                          mnode, fnode, react)
+        if not _condense(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
+                         tmp33b, bX[b], by[b], mnode, fnode, reduced):
+            return True
+        for i in range(3):
+            bkc[b, BK_INERTIA + i] = arr[i, i]
+        # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
+        for i in range(3):
+            for j in range(3):
+                sacc = 0.0
+                for k in range(3):
+                    for m in range(3):
+                        sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
+                bnode[a, i, j] += sacc
+    if it == 1 and any_aft:
+        # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
+        for b in range(nb):
+            c = body_aft_node[b]
+            if c >= 0:
+                aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
+                                         stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc)
+    return False
+
+
+@njit(cache=True, _nrt=False)
+def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind, node_nseg,
+                     node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens, mnode, bnode, fnode,
+                     acon, qvec, att, tmp33, tmp33b, hvec, tmp3):
+    """Every free node's position as a function of its segments' tensions, r_a = A_a + Σ σ T q_a,k (acon,
+    qvec), from the node's 3×3 system at the current iterate; the compensator's sheave node by its own law.
+    Returns the index of a node whose matrix is singular, or −1."""
+    nn = rs.shape[0]
+    nb = body_node.shape[0]
+    c11 = 11.0 * dt / 12.0
+    hdt2 = 0.5 * dt * dt
+    for a in range(nn):
+        if node_kind[a] == COMPENSATOR:
+            _compensator_node(a, int(comp[C_SHIP]), comp, cmode, act_new, dt, rs, r_t, r_tm1, r_tm2, node_nseg,
+                              node_segs, tang, stretched, tens, mnode, bnode, fnode, acon, qvec)
+            continue
+        if node_kind[a] != FREE:
+            continue
+        # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
+        # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
+        # both sides, so they change the convergence rate only, never the converged solution.
+        for i in range(3):
+            for j in range(3):
+                kg = 0.0
+                for k in range(node_nseg[a]):
+                    sk = node_segs[a, k]
+                    if stretched[sk] > 0.0:
+                        kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+                att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
+                tmp33[i, j] = mnode[a, i, j] + att[i, j]
+        # a body towing a tail from its aft tow point: the tail's pull is a load on the body inside the
+        # Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ +
+        # T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness)
+        for b in range(nb if any_aft else 0):
+            c = body_aft_node[b]
+            if body_node[b] != a or c < 0:
+                continue
+            for k in range(node_nseg[c]):
+                sk = node_segs[c, k]
+                kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
+                if kax == 0.0 and kgeo == 0.0:
+                    continue
+                for i in range(3):
+                    for j in range(3):
+                        tt = tang[sk, i] * tang[sk, j]
+                        add = hdt2 * (kax * tt + kgeo * ((1.0 if i == j else 0.0) - tt))
+                        att[i, j] += add
+                        tmp33[i, j] += add
+        if not _inv3(tmp33, tmp33b):
+            return a
+        for j in range(3):
+            hvec[j] = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
+        for i in range(3):
+            hi = 0.0
+            for j in range(3):
+                hi += mnode[a, i, j] * hvec[j] + att[i, j] * rs[a, j]
+            tmp3[i] = hi + hdt2 * fnode[a, i]
+        for i in range(3):
+            acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
+        for k in range(node_nseg[a]):
+            s = node_segs[a, k]
+            for i in range(3):
+                qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
+                                        + tmp33b[i, 2] * tang[s, 2])
+    if planar:
+        # vertical-plane model: free nodes hold their lateral coordinate. The scenes it accepts have no
+        # x–y or y–z coupling in M̃ (no lateral tangent, velocity or body asymmetry), so the (x, z) rows
+        # of the 3-D solve are the plane's own solve (a separate 2×2 path measured slower)
+        for a in range(nn):
+            if node_kind[a] == FREE:
+                acon[a, 1] = r_t[a, 1]
+                for k in range(node_nseg[a]):
+                    qvec[a, k, 1] = 0.0
+    return -1
+
+
+@njit(cache=True, _nrt=False)
+def tension_system(seg_lo, seg_up, node_kind, node_nseg, node_segs, node_sgn, l0, ea, tang, qvec, acon, tens, rs,
+                   angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb):
+    """The Newton system of the segment tensions on the tree: positions at the current tensions, the length
+    residuals g_s = ℓ_s − ℓ0_s (1 + T_s/EA_s) as the right-hand side, the tension matrix (kd, kb) with slack
+    segments held at T = 0. Returns the largest tension (for the relative tolerance)."""
+    ns = tens.shape[0]
+    _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
+    place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
+    tmax = 0.0
+    for s in range(ns):
+        p = seg_lo[s]
+        q = seg_up[s]
+        dx = rs[q, 0] - rs[p, 0]
+        dy = rs[q, 1] - rs[p, 1]
+        dz = rs[q, 2] - rs[p, 2]
+        ell = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if math.isinf(ea[s]):
+            gres[s] = ell - l0[s]
         else:
-            fs = _end_stop_force(cnode, top_node, comp, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, node_sgn,
-                                 tang, tens, mnode, fnode)
-            if trial * fs > 0.0:       # the stop would have to pull: release
-                comp[C_TRIAL] = 0.0
-                return RETRY_CONTACT, it, cnode, maxd
-    # --- checks and commit ------------------------------------------------------------------------
+            gres[s] = ell - l0[s] * (1.0 + tens[s] / ea[s])
+        if tens[s] > tmax:
+            tmax = tens[s]
+    assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qvec, l0, ea, tens, kd, kb)
+    for s in range(ns):
+        rhs[s] = gres[s]
+        if tens[s] <= 0.0 and gres[s] < 0.0:
+            # slack segment: hold T = 0 (row and column replaced by identity)
+            kd[s] = 1.0
+            rhs[s] = -tens[s]
+            for e in range(2):
+                a = seg_lo[s] if e == 0 else seg_up[s]
+                for k in range(node_nseg[a]):
+                    if node_segs[a, k] == s:
+                        for k2 in range(node_nseg[a]):
+                            kb[a, k, k2] = 0.0
+                            kb[a, k2, k] = 0.0
+    return tmax
+
+
+@njit(cache=True, _nrt=False)
+def tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, tens, rs):
+    """The Newton update T ← max(T + δT, 0) and the node positions at the new tensions (same coefficients).
+    Returns (segment of the largest change, the largest change — NaN-safe —, any segment slack)."""
+    ns = tens.shape[0]
+    maxd = 0.0
+    elem = -1
+    any_slack = False
+    for s in range(ns):
+        tn = tens[s] + dT[s]
+        if tn < 0.0:
+            tn = 0.0
+        if tn <= 0.0:
+            any_slack = True
+        d = abs(tn - tens[s])
+        if not (d <= maxd):     # also catches NaN
+            maxd = d
+            elem = s
+        tens[s] = tn
+    if math.isfinite(maxd):
+        _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
+    return elem, maxd, any_slack
+
+
+@njit(cache=True, _nrt=False)
+def body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, omg, blam, body_node, bp, bX, by, bkc,
+                      tmp3, hvec):
+    """Body rotations at the new node positions: ω̇ = A_rr⁻¹(M − A_rt a) from the condensed body equations,
+    Houbolt on the Euler angles, relaxed by the implicit diagonal rotational stiffness and damping. Returns (a
+    body past the chart's pitch limit or −1, the largest angle change)."""
+    nb = body_node.shape[0]
+    c11 = 11.0 * dt / 12.0
+    hdt2 = 0.5 * dt * dt
+    idt2 = 1.0 / (dt * dt)
+    dang_max = 0.0
+    for b in range(nb):
+        a = body_node[b]
+        lam = blam[b]
+        for i in range(3):
+            tmp3[i] = (2.0 * rs[a, i] - 5.0 * r_t[a, i] + 4.0 * r_tm1[a, i] - r_tm2[a, i]) * idt2
+        for i in range(3):
+            hvec[i] = lam[i, 0] * tmp3[0] + lam[i, 1] * tmp3[1] + lam[i, 2] * tmp3[2]
+        for i in range(3):
+            tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
+        omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
+        reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
+        for i in range(3):
+            if reduced and i != 1:
+                angs[b, i] = hist_ang[0, b, i]      # roll and yaw held
+                continue
+            na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
+            # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
+            # of the fixed-point update that leaves the converged solution unchanged
+            na = angs[b, i] + (na - angs[b, i]) / (
+                1.0 + (hdt2 * bkc[b, BK_STIFFNESS + i] + c11 * bkc[b, BK_DAMPING + i]) / bkc[b, BK_INERTIA + i])
+            dd = abs(na - angs[b, i])
+            if not (dd <= dang_max):
+                dang_max = dd
+            angs[b, i] = na
+        if abs(angs[b, 1]) > PITCH_LIMIT:     # ~85 deg in the chart: only if re-charting (advance) could not keep up
+            return b, dang_max
+    return -1, dang_max
+
+
+@njit(cache=True, _nrt=False)
+def end_stop_contact(dt, top_node, cnode, comp, r_t, r_tm1, r_tm2, rs, node_nseg, node_segs, node_sgn, tang, tens,
+                     mnode, fnode):
+    """The compensator's end-stop active set (passive/force mode): True when the converged step contradicts the
+    contact state it was solved with (the sheave passed a stop, or the stop would have to pull) — the contact
+    trial ``comp[C_TRIAL]`` is updated and the step must be redone."""
+    z_new = rs[cnode, 2] - rs[top_node, 2]
+    trial = comp[C_TRIAL]
+    if trial == 0.0:
+        if z_new > comp[C_SMAX]:
+            comp[C_TRIAL] = 1.0
+            return True
+        if z_new < comp[C_SMIN]:
+            comp[C_TRIAL] = -1.0
+            return True
+    else:
+        fs = _end_stop_force(cnode, top_node, comp, dt, rs, r_t, r_tm1, r_tm2, node_nseg, node_segs, node_sgn,
+                             tang, tens, mnode, fnode)
+        if trial * fs > 0.0:       # the stop would have to pull: release
+            comp[C_TRIAL] = 0.0
+            return True
+    return False
+
+
+@njit(cache=True, _nrt=False)
+def commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, tens, rs, angs, r_t, r_tm1, r_tm2,
+           hist_r, hist_ang, tens_hist, top_react, react, node_nseg, node_segs, node_sgn, tang, mnode, fnode):
+    """Checks of the converged step (strain limit, finite positions) and, if they pass, the commit: the top
+    reaction, the compensator's contact/hit/penetration state and the time levels shifted. Returns (OK, −1) or
+    (FAIL_STRETCH, segment) / (FAIL_NAN, node) with ``state`` untouched."""
+    nn = rs.shape[0]
+    ns = tens.shape[0]
+    nb = angs.shape[0]
     for s in range(ns):
         if not math.isinf(ea[s]) and tens[s] / ea[s] > max_strain:
-            return FAIL_STRETCH, it, s, maxd
+            return FAIL_STRETCH, s
     for a in range(nn):
         for i in range(3):
             if not math.isfinite(rs[a, i]):
-                return FAIL_NAN, it, a, maxd
+                return FAIL_NAN, a
     # reaction at the cable's top (the vessel tow point, or the compensator sheave) at the converged
     # state (coefficients of the last iterate)
     rnode = cnode if cmode > 0 else top_node
@@ -398,7 +521,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     for s in range(ns):
         tens_hist[1, s] = tens_hist[0, s]
         tens_hist[0, s] = tens[s]
-    return OK, it, -1, maxd
+    return OK, -1
 
 
 @njit(cache=True)

@@ -1,7 +1,16 @@
 """The project's numba decorator, and a guard that keeps numba's on-disk cache consistent.
 
-``njit`` is numba's with the fast-math flags every kernel uses (reassociation and contraction allowed;
-NaN/Inf semantics kept — failure detection relies on them) and ``cache=True`` at the call sites.
+``njit`` is numba's with ``fastmath`` off for every kernel (exact IEEE arithmetic: LLVM may not reassociate
+or fuse floating-point operations) and ``cache=True`` at the call sites. Fast-math used to be on; it was
+turned off (2026-12-02, issue 16) because it made the last bits of a trajectory depend on how LLVM happened to
+inline and re-optimise a kernel: numba links a callee's optimised code into every caller and re-optimises it
+there, and with reassociation/contraction allowed those copies differ in the last bits; which copy a call
+reaches depends on whether the kernels were compiled in the process or loaded from numba's cache. Measured on
+the phase-split Houbolt step: with fast-math, a first (compiling) run and a second (cached) run of the same
+code on the same machine gave different trajectories (~1e-11 relative); without it both gave the same bits,
+and the same bits as the unsplit step. Without fast-math the compiled results do not depend on the code's
+structure at all (refactors can be checked bit for bit), at no measurable cost (paired runs in
+docs/architecture.md).
 
 Numba's cache checks only the source file of the function it compiled, not the files of the kernels that
 function calls: the Houbolt step in ``houbolt.py`` compiled against an older ``cable_loads.py`` would be
@@ -18,7 +27,8 @@ from pathlib import Path
 
 from numba import njit as _njit
 
-FASTMATH = {"reassoc", "contract", "arcp", "nsz"}
+#: the fast-math flags every kernel compiles with: none (see the module docstring)
+FASTMATH = False
 
 #: the package's folders that hold compiled kernels (their ``__pycache__`` holds numba's cache files)
 KERNEL_FOLDERS = ("core", "envs", "linear", "verification")

@@ -148,6 +148,7 @@ class HouboltWork(NamedTuple):
     bdmat: np.ndarray           # (nb, 3, 3) body translational damping
     scr: np.ndarray             # (6, 3) scratch
     flow: np.ndarray            # (nn, 3) wave orbital velocity at the nodes
+    recursion: np.ndarray       # (6, ns) scratch of the as-published tension recursion
 
     @staticmethod
     def allocate(nn: int, ns: int, nb: int) -> "HouboltWork":
@@ -158,7 +159,7 @@ class HouboltWork(NamedTuple):
             z(ns), z((nn, mk, mk)), z(ns), z(ns), z(ns), z(ns),
             z((nb, 3, 3)), z((nb, 3)), z((nb, 3, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)),
             z(3), z(3), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)),
-            z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)))
+            z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)), z((6, ns)))
 
 
 class ExplicitWork(NamedTuple):

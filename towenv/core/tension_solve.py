@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .jit import njit
 from .layout import (COMPENSATOR, FREE)
 
@@ -100,7 +98,7 @@ def tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs,
 
 
 @njit(cache=True)
-def thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, x, work):
+def thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, x, work, scratch):
     """The thesis's printed shooting recursion (4.38)–(4.40), *as published*, for a single chain — the
     labelled "as published" variant of the tension solve (``solver.tension_solve = "as_published"``).
 
@@ -108,15 +106,19 @@ def thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_s
     ``δT_i = μ_i δT_0 + η_i`` and closed at the top. The homogeneous recurrence grows like λⁿ
     (λ + 1/λ = 2 + s, s = 2(l/(c_L Δt))²), so for stiff cables at large steps round-off swamps the
     answer (model.md 5.6, erratum E15). Kept to show that failure; the default is ``tree_ldlt_solve``.
-    Returns False if a G coefficient is zero or the result is not finite."""
+    Returns False if a G coefficient is zero or the result is not finite. ``scratch``: (6, n) work array (the
+    Houbolt step runs without numba's reference counting, so nothing here allocates)."""
     n = order.shape[0]
     # E_i, F_i, G_i in bottom-up order (J = −K: E = −K[i, i−1], F = K[i, i], G = −K[i, i+1])
-    mu = np.zeros(n)
-    eta = np.zeros(n)
-    E = np.zeros(n)
-    F = np.zeros(n)
-    G = np.zeros(n)
-    R = np.zeros(n)
+    for j in range(6):
+        for i in range(n):
+            scratch[j, i] = 0.0
+    mu = scratch[0]
+    eta = scratch[1]
+    E = scratch[2]
+    F = scratch[3]
+    G = scratch[4]
+    R = scratch[5]
     for i in range(n):
         p = order[i]
         F[i] = kd[p]
