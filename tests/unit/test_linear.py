@@ -325,9 +325,9 @@ def test_scenes_it_cannot_linearise():
 def test_damped_modes_predict_the_lateral_instability_of_the_towfish():
     """hover_deep_tow at 2 m/s in calm water: the linearised model has a lateral (roll/yaw) mode with a
     positive growth rate σ; the nonlinear 3-D simulator, started in equilibrium with the towfish yawed by
-    1e-12 rad, shows the same mode growing (the yaw envelope grows e^{100σ} ≈ 2e4-fold in 100 s) at the same rate. (The
-    seed is explicit: the kernels compute exactly, so an exactly symmetric start stays in its plane; under
-    fast-math the round-off seeded the mode.) Tolerance 2 %: the envelope fit over 100 s resolves σ to
+    1e-12 rad, shows the same mode growing (the yaw envelope grows e^{100σ} ≈ 2e4-fold in 100 s) at the
+    same rate. (The seed is explicit: the kernels compute exactly, so an exactly symmetric start stays in its
+    plane; under fast-math the round-off seeded the mode.) Tolerance 2 %: the envelope fit over 100 s resolves σ to
     ~0.5 %, and Houbolt's numerical damping at ωΔt = 0.036 is ~1e-5/s."""
     from towenv.core.simulator import Simulator
     sc = load("hover_deep_tow").with_overrides({"vessel.speed": 2.0, "solver.dt": 0.02, "vessel.excitation": None})
