@@ -42,3 +42,15 @@ def test_installed_package_carries_its_data():
     assert "two_part_tow_1" in list_scenes()
     assert (zoo.HYPERPARAMS_DIR / "ppo.yml").is_file() and (zoo.HYPERPARAMS_DIR / "baselines.yml").is_file()
     assert len(list(zoo.TRAINED_DIR.glob("*.zip"))) >= 6
+
+
+def test_import_towenv_does_not_load_the_simulator():
+    """``import towenv`` loads what a user touches (issue 15): the simulator's names are imported on first use,
+    so numba (the larger part of the import time) is not loaded by the bare import; the names still work."""
+    import subprocess
+    import sys
+    code = ("import sys, towenv; before = 'numba' in sys.modules; from towenv import Simulator, simulate; "
+            "print(before, 'numba' in sys.modules, Simulator.__name__, callable(simulate), 'Simulator' in dir(towenv))")
+    p = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert p.stdout.split() == ["False", "True", "Simulator", "True", "True"]
