@@ -54,13 +54,12 @@ class Linearisation:
             r[c] = r[s.body_node[b]] + lam.T @ s.bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3]
         return r, ang
 
-    # ---- nonlinear generalised forces (steady velocities) ---------------------------------------
-    def _forces(self, q, u, with_stroke=False):
-        """Return (Q (n), segment tensions (S), top reaction (3)) at the steady tow velocity."""
+    # ---- cable loads of the nonlinear model -------------------------------------------------------
+    def _cable_loads(self, r, v):
+        """The kernels' segment loads and node assembly at positions ``r`` and velocities ``v``: (tangents,
+        stretched lengths, node mass matrices, node forces)."""
         s = self.system
-        r, ang = self._positions(q, u)
         ns, nn = s.n_segments, s.n_nodes
-        v = np.tile(self.U, (nn, 1))
         tang = np.empty((ns, 3))
         stre = np.empty(ns)
         drag = np.empty((ns, 2, 3))
@@ -74,6 +73,16 @@ class Linearisation:
         K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g,
                         drag, bmat, madd, s.pb_mass, s.pb_vol, s.pb_cda, s.pb_ca, s.cur_z, s.cur_v, mnode, bnode,
                         fnode)
+        return tang, stre, mnode, fnode
+
+    # ---- nonlinear generalised forces (steady velocities) ---------------------------------------
+    def _forces(self, q, u, with_stroke=False):
+        """Return (Q (n), segment tensions (S), top reaction (3)) at the steady tow velocity."""
+        s = self.system
+        r, ang = self._positions(q, u)
+        nn = s.n_nodes
+        v = np.tile(self.U, (nn, 1))
+        tang, stre, mnode, fnode = self._cable_loads(r, v)
         T = s.ea * (stre / s.l0 - 1.0)
         F = fnode.copy()
         np.add.at(F, s.seg_lo, T[:, None] * tang)
@@ -237,20 +246,7 @@ class Linearisation:
         # mass: node masses (dry + added) at the static state, bodies, projected
         r = self.r0
         v = np.tile(self.U, (nn, 1))
-        ns = s.n_segments
-        tang = np.empty((ns, 3))
-        stre = np.empty(ns)
-        drag = np.empty((ns, 2, 3))
-        bmat = np.empty((ns, 2, 3, 3))
-        madd = np.empty((ns, 3, 3))
-        mnode = np.empty((nn, 3, 3))
-        bnode = np.empty((nn, 3, 3))
-        fnode = np.empty((nn, 3))
-        K.segment_loads(r, v, s.seg_lo, s.seg_up, s.l0, s.diam, s.mu, s.cn, s.ct, s.can, s.cat, s.rho, s.g,
-                        s.cur_z, s.cur_v, tang, stre, drag, bmat, madd)
-        K.node_assembly(r, v, s.node_kind, s.node_nseg, s.node_segs, s.node_sgn, s.l0, s.diam, s.mu, s.rho, s.g,
-                        drag, bmat, madd, s.pb_mass, s.pb_vol, s.pb_cda, s.pb_ca, s.cur_z, s.cur_v, mnode, bnode,
-                        fnode)
+        tang, stre, mnode, fnode = self._cable_loads(r, v)
         self.tang0 = tang.copy()
         self.mnode = mnode.copy()
         Mall = np.zeros((3 * nn, 3 * nn))
