@@ -91,7 +91,29 @@ def chain_scene(n=40):
                                  EA=1.0e6, top="vessel", bottom="free")], [], speed=0.0)
 
 
-SCENES = {"two_part": two_part_scene, "parallel": parallel_scene, "series": series_scene}
+#: a full 6x6 added mass about a point aft of the tow point (heave-pitch and sway-yaw coupling), with the
+#: added mass's Coriolis/centripetal terms and Munk moment on (issue 18, item 1)
+FISH_ADDED_MASS_MATRIX = [[3.0, 0.0, 0.4, 0.0, 0.0, 0.0],
+                          [0.0, 35.0, 0.0, 0.3, 0.0, 2.0],
+                          [0.4, 0.0, 35.0, 0.0, -1.5, 0.0],
+                          [0.0, 0.3, 0.0, 0.5, 0.0, 0.0],
+                          [0.0, 0.0, -1.5, 0.0, 3.0, 0.0],
+                          [0.0, 2.0, 0.0, 0.0, 0.0, 3.0]]
+
+
+def kirchhoff_scene(**kw):
+    """The two-part tow with the fish's added mass as a full matrix about (−0.5, 0, 0) and the Kirchhoff terms."""
+    sc = two_part_scene(**kw)
+    fish = sc["bodies"][0]
+    fish.update(added_mass=[0.0, 0.0, 0.0], added_inertia=[0.0, 0.0, 0.0],
+                added_mass_matrix=copy.deepcopy(FISH_ADDED_MASS_MATRIX), added_mass_reference=[-0.5, 0.0, 0.0],
+                added_mass_coriolis=True)
+    sc["name"] = "kirchhoff"
+    return sc
+
+
+SCENES = {"two_part": two_part_scene, "parallel": parallel_scene, "series": series_scene,
+          "kirchhoff": kirchhoff_scene}
 
 
 def _simulator(scene):

@@ -9,7 +9,8 @@ import math
 
 
 from .jit import njit
-from .layout import (BK_DAMPING, BK_STIFFNESS, BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB,
+from .layout import (BK_DAMPING, BK_STIFFNESS, BP_ADDED_CORIOLIS, BP_ADDED_COUPLED, BP_ADDED_COUPLING,
+                     BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB,
                      BP_CG, BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_ROT_DAMPING,
                      BP_VOLUME)
 from .rotations import _chart_rotation, _cross, _inv3
@@ -126,11 +127,87 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
         quad = bp[b, BP_QUAD_ROT_DAMPING + k]
         w = omega[k]
         m_out[k] -= qa * length * length * vmag * lin * w + qa * quad * length ** 3 / 32.0 * w * abs(w)
+    if bp[b, BP_ADDED_CORIOLIS] != 0.0:
+        added_mass_coriolis(b, bp, vbody[0] - vc0, vbody[1] - vc1, vbody[2] - vc2, omega, f_out, m_out)
+
+
+@njit(cache=True)
+def _added_mass_entry(b, bp, i, j):
+    """Entry (i, j) of the 6×6 added mass about the tow point (diagonal + coupling columns of ``bp``)."""
+    if i == j:
+        return bp[b, BP_ADDED_MASS + i] if i < 3 else bp[b, BP_ADDED_INERTIA + i - 3]
+    return bp[b, BP_ADDED_COUPLING + 6 * i + j]
+
+
+@njit(cache=True)
+def added_mass_coriolis(b, bp, v0, v1, v2, omega, f_out, m_out):
+    """Coriolis/centripetal loads of the added mass (Kirchhoff's equations; Fossen's −C_A(ν_r)ν_r), added to the
+    body-axis force ``f_out`` and the moment ``m_out`` about the tow point. They include the **Munk moment**
+    −v × (A₁₁ v).
+
+    With ν_r = (v, ω) the tow point's velocity relative to the water (body axes) and M_A = [[A₁₁, A₁₂], [A₂₁,
+    A₂₂]] about the tow point, the fluid's momentum is p = A₁₁ v + A₁₂ ω, its angular momentum h = A₂₁ v + A₂₂ ω,
+    and the added-mass loads are −(ṗ + ω × p) and −(ḣ + ω × h + v × p) with body-frame derivatives. The mass
+    matrix multiplies the *inertial* acceleration a = v̇ + ω × v (the condensation's unknown), so
+    A₁₁ v̇ = A₁₁ a − A₁₁ (ω × v): the loads not in the mass matrix are
+
+        f += A₁₁ (ω × v) − ω × p,      m += A₂₁ (ω × v) − ω × (A₂₁ v) − v × p,
+
+    the remaining −ω × (A₂₂ ω) being the gyroscopic term ``_condense`` applies to the whole rotational inertia.
+    With them a body with no damping in still water keeps its kinetic energy ½ νᵀ(M_RB + M_A)ν (tested)."""
+    w0 = omega[0]
+    w1 = omega[1]
+    w2 = omega[2]
+    # ω × v
+    c0 = w1 * v2 - w2 * v1
+    c1 = w2 * v0 - w0 * v2
+    c2 = w0 * v1 - w1 * v0
+    v = (v0, v1, v2)
+    w = (w0, w1, w2)
+    c = (c0, c1, c2)
+    p0 = 0.0
+    p1 = 0.0
+    p2 = 0.0
+    h0 = 0.0
+    h1 = 0.0
+    h2 = 0.0
+    for i in range(3):
+        pi = 0.0
+        hv = 0.0        # (A21 v)_i
+        fc = 0.0        # (A11 (ω×v))_i
+        mc = 0.0        # (A21 (ω×v))_i
+        for j in range(3):
+            a11 = _added_mass_entry(b, bp, i, j)
+            a12 = _added_mass_entry(b, bp, i, j + 3)
+            a21 = _added_mass_entry(b, bp, i + 3, j)
+            pi += a11 * v[j] + a12 * w[j]
+            hv += a21 * v[j]
+            fc += a11 * c[j]
+            mc += a21 * c[j]
+        if i == 0:
+            p0 = pi
+            h0 = hv
+        elif i == 1:
+            p1 = pi
+            h1 = hv
+        else:
+            p2 = pi
+            h2 = hv
+        f_out[i] += fc
+        m_out[i] += mc
+    # − ω × p,  − ω × (A21 v),  − v × p
+    f_out[0] -= w1 * p2 - w2 * p1
+    f_out[1] -= w2 * p0 - w0 * p2
+    f_out[2] -= w0 * p1 - w1 * p0
+    m_out[0] -= (w1 * h2 - w2 * h1) + (v1 * p2 - v2 * p1)
+    m_out[1] -= (w2 * h0 - w0 * h2) + (v2 * p0 - v0 * p2)
+    m_out[2] -= (w0 * h1 - w1 * h0) + (v0 * p1 - v1 * p0)
 
 
 @njit(cache=True)
 def body_mass_blocks(b, bp, att, atr, arr):
-    """Rigid-body + added mass blocks about the tow point: A = [[A_tt, A_tr], [A_rt, A_rr]], A_rt = A_trᵀ."""
+    """Rigid-body + added mass blocks about the tow point: A = [[A_tt, A_tr], [A_rt, A_rr]], A_rt = A_trᵀ
+    (the added mass's coupling blocks are symmetric: its A₂₁ = A₁₂ᵀ)."""
     mass = bp[b, BP_MASS]
     xg = bp[b, BP_CG]
     yg = bp[b, BP_CG + 1]
@@ -156,6 +233,13 @@ def body_mass_blocks(b, bp, att, atr, arr):
     atr[2, 0] = mass * yg
     atr[2, 1] = -mass * xg
     atr[2, 2] = 0.0
+    if bp[b, BP_ADDED_COUPLED] != 0.0:
+        # off-diagonal added mass (a full 6x6 matrix about the tow point): A_tt, A_tr, A_rr
+        for i in range(3):
+            for j in range(3):
+                att[i, j] += bp[b, BP_ADDED_COUPLING + 6 * i + j]
+                atr[i, j] += bp[b, BP_ADDED_COUPLING + 6 * i + j + 3]
+                arr[i, j] += bp[b, BP_ADDED_COUPLING + 6 * (i + 3) + j + 3]
 
 
 @njit(cache=True)

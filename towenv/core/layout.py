@@ -23,7 +23,12 @@ BP_ADDED_INERTIA = 23       # 23-25: added inertia (diagonal), kg m^2
 BP_AFT_TOW_POINT = 26       # 26-28: aft tow point (series tows), m
 BP_REDUCED_DOF = 29         # 1: surge/heave/pitch only (roll and yaw held), 0: 6 DOF
 BP_TAIL_MASS = 30           # mass hanging from the aft tow point (series tows), kg
-BODY_PARAM = 31             # columns in a row
+BP_ADDED_COUPLING = 31      # 31-66: the 6x6 added mass about the tow point, row-major over (surge, sway, heave,
+                            #        roll, pitch, yaw), with its diagonal set to 0 (the diagonal is BP_ADDED_MASS
+                            #        and BP_ADDED_INERTIA); all 0 for a diagonal added mass
+BP_ADDED_COUPLED = 67       # 1: BP_ADDED_COUPLING has a non-zero entry, 0: diagonal added mass
+BP_ADDED_CORIOLIS = 68      # 1: the added mass's Coriolis/centripetal terms (Munk moment included) are applied
+BODY_PARAM = 69             # columns in a row
 
 
 # ------------------------------------------------------------------------------------------------------

@@ -10,7 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from .layout import (BODY_PARAM, BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG,  # noqa: F401
+from .layout import (BODY_PARAM, BP_ADDED_CORIOLIS, BP_ADDED_COUPLED, BP_ADDED_COUPLING, BP_ADDED_INERTIA,  # noqa: F401
+                     BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG,
                      BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_REDUCED_DOF,
                      BP_ROT_DAMPING, BP_TAIL_MASS, BP_VOLUME)
 
@@ -406,6 +407,23 @@ def _vec(v):
     return np.asarray(v, float)
 
 
+def added_mass_about_tow_point(b) -> np.ndarray:
+    """The 6×6 added mass of rigid body ``b`` about its tow point (body axes; over surge, sway, heave, roll,
+    pitch, yaw). A matrix given about the point r (``added_mass_reference``) is moved with the rigid-body
+    velocity transformation: the reference point moves at v + ω × r = v − S(r) ω, so with
+    H = [[𝟙, −S(r)], [0, 𝟙]] the kinetic energy ½ νᵣᵀ M_r νᵣ = ½ νᵀ (Hᵀ M_r H) ν and M_tow point = Hᵀ M_r H.
+    Without a matrix: diag(added_mass, added_inertia)."""
+    M = getattr(b, "added_mass_matrix", None)
+    if M is None:
+        return np.diag(np.r_[_vec(b.added_mass), _vec(b.added_inertia)])
+    M = np.asarray(M, float)
+    M = 0.5 * (M + M.T)                      # symmetric to round-off (the schema checks it to 1e-9)
+    r = _vec(b.added_mass_reference)
+    H = np.eye(6)
+    H[:3, 3:] = -np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    return H.T @ M @ H
+
+
 def _rigid_body_params(b) -> np.ndarray:
     """One row of ``System.bp`` (the column layout is :mod:`towenv.core.layout`)."""
     p = np.zeros(BODY_PARAM)
@@ -418,8 +436,18 @@ def _rigid_body_params(b) -> np.ndarray:
     p[BP_INERTIA:BP_INERTIA + 3] = _vec(b.inertia)
     p[BP_ROT_DAMPING:BP_ROT_DAMPING + 3] = _vec(b.rotational_damping)
     p[BP_QUAD_ROT_DAMPING:BP_QUAD_ROT_DAMPING + 3] = _vec(b.quadratic_rotational_damping)
-    p[BP_ADDED_MASS:BP_ADDED_MASS + 3] = _vec(b.added_mass)
-    p[BP_ADDED_INERTIA:BP_ADDED_INERTIA + 3] = _vec(b.added_inertia)
+    if getattr(b, "added_mass_matrix", None) is None:
+        p[BP_ADDED_MASS:BP_ADDED_MASS + 3] = _vec(b.added_mass)
+        p[BP_ADDED_INERTIA:BP_ADDED_INERTIA + 3] = _vec(b.added_inertia)
+    else:
+        M = added_mass_about_tow_point(b)
+        d = np.diag(M).copy()
+        p[BP_ADDED_MASS:BP_ADDED_MASS + 3] = d[:3]
+        p[BP_ADDED_INERTIA:BP_ADDED_INERTIA + 3] = d[3:]
+        np.fill_diagonal(M, 0.0)
+        p[BP_ADDED_COUPLING:BP_ADDED_COUPLING + 36] = M.reshape(36)
+        p[BP_ADDED_COUPLED] = 1.0 if np.any(M != 0.0) else 0.0
+    p[BP_ADDED_CORIOLIS] = 1.0 if getattr(b, "added_mass_coriolis", False) else 0.0
     p[BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3] = _vec(b.aft_tow_point if b.aft_tow_point is not None else (0.0, 0.0, 0.0))   # none: unused
     p[BP_REDUCED_DOF] = 1.0 if b.dof == "surge_heave_pitch" else 0.0
     return p

@@ -137,6 +137,39 @@ def Vec3(*, gt=None, ge=None, lt=None, le=None, abs_le=None, unit="m"):
                      PlainSerializer(lambda v: [float(x) for x in v], return_type=list)]
 
 
+def Matrix6(*, unit=""):
+    """A 6×6 matrix of finite floats, six rows of six numbers (stored as a tuple of tuples)."""
+    what = f"must be a 6x6 matrix: a list of 6 rows, each a list of 6 numbers{(' (' + unit + ')') if unit else ''}"
+
+    def validate(v):
+        if isinstance(v, (str, bytes, Mapping)) or not hasattr(v, "__iter__"):
+            _value_error(what)
+        rows = list(v)
+        if len(rows) != 6:
+            _value_error(what)
+        out = []
+        for i, row in enumerate(rows):
+            if isinstance(row, (str, bytes, Mapping)) or not hasattr(row, "__iter__"):
+                _value_error(what)
+            items = list(row)
+            if len(items) != 6 or not all(_is_number(x) for x in items):
+                _value_error(f"{what}; row {i} is not 6 numbers")
+            vals = []
+            for j, x in enumerate(items):
+                try:
+                    f = float(x)
+                except (OverflowError, ValueError, TypeError):
+                    _value_error(what)
+                if not math.isfinite(f):
+                    _value_error(f"{what}; element [{i}][{j}] is not finite")
+                vals.append(f)
+            out.append(tuple(vals))
+        return tuple(out)
+
+    return Annotated[tuple[tuple[float, ...], ...], PlainValidator(validate),
+                     PlainSerializer(lambda v: [[float(x) for x in r] for r in v], return_type=list)]
+
+
 def _validate_name(v):
     if not isinstance(v, str) or not v.strip():
         _value_error("must be a non-empty string")

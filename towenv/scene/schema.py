@@ -14,7 +14,7 @@ from pydantic.functional_serializers import PlainSerializer
 from pydantic.functional_validators import PlainValidator
 
 from .errors import SceneError, _problems, _short
-from .fields import Int, MAX_SEGMENTS, Num, Vec3, _SEGMENTS_WHY, _choice, _validate_name, _validate_segments, _validate_text
+from .fields import Int, MAX_SEGMENTS, Matrix6, Num, Vec3, _SEGMENTS_WHY, _choice, _validate_name, _validate_segments, _validate_text
 from .overrides import _clean, _set_path
 from .toml_writer import dumps_toml
 
@@ -576,6 +576,13 @@ class RigidBody(_BodyBase):
     aft_tow_point: Vec3(unit="m") | None = None
     added_mass: Vec3(ge=0, unit="kg") = (0.0, 0.0, 0.0)
     added_inertia: Vec3(ge=0, unit="kg m^2") = (0.0, 0.0, 0.0)
+    # the full (symmetric, positive semi-definite) 6x6 added mass over (surge, sway, heave, roll, pitch, yaw)
+    # about the point ``added_mass_reference`` (body axes, from the tow point): instead of the diagonal above
+    added_mass_matrix: Matrix6(unit="kg, kg m, kg m^2") | None = None
+    added_mass_reference: Vec3(unit="m") = (0.0, 0.0, 0.0)
+    # the added mass's Coriolis/centripetal terms (Kirchhoff; they include the Munk moment): off by default
+    # because measured moment tables already contain the Munk moment (docs/scene-format.md)
+    added_mass_coriolis: bool = False
     reference_area: Num(gt=0, unit="m^2")
     reference_length: Num(gt=0, unit="m")
     coefficients: CoefficientTable
@@ -583,6 +590,34 @@ class RigidBody(_BodyBase):
     rotational_damping: Vec3(ge=0, unit="") = (0.1, 0.1, 0.1)
     quadratic_rotational_damping: Vec3(ge=0, unit="") = (0.5, 0.5, 0.5)
     dof: _choice("6dof", "surge_heave_pitch") = "6dof"      # surge_heave_pitch: roll and yaw held
+
+    @model_validator(mode="after")
+    def _check_added_mass(self):
+        probs = []
+        M = self.added_mass_matrix
+        if M is None:
+            if any(x != 0.0 for x in self.added_mass_reference):
+                probs.append(("added_mass_reference", "is the point about which added_mass_matrix is given: set "
+                                                      "added_mass_matrix too, or leave it out"))
+        else:
+            if any(x != 0.0 for x in self.added_mass) or any(x != 0.0 for x in self.added_inertia):
+                probs.append(("added_mass_matrix", "give either added_mass/added_inertia (diagonal, at the tow "
+                                                   "point) or added_mass_matrix, not both"))
+            scale = max(abs(x) for r in M for x in r) or 1.0
+            asym = [(i, j) for i in range(6) for j in range(i + 1, 6) if abs(M[i][j] - M[j][i]) > 1e-9 * scale]
+            if asym:
+                i, j = asym[0]
+                probs.append((f"added_mass_matrix[{i}][{j}]", f"must equal added_mass_matrix[{j}][{i}]: an added-mass "
+                                                             f"matrix is symmetric (got {M[i][j]!r} and {M[j][i]!r})"))
+            else:
+                import numpy as np
+                lo = float(np.linalg.eigvalsh(np.array(M, float)).min())
+                if lo < -1e-9 * scale:
+                    probs.append(("added_mass_matrix", f"must be positive semi-definite (kinetic energy >= 0); its "
+                                                       f"smallest eigenvalue is {lo:.6g}"))
+        if probs:
+            _problems(*probs)
+        return self
 
     @property
     def centre_of_buoyancy(self) -> tuple[float, float, float]:

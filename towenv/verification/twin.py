@@ -276,10 +276,13 @@ def body_params(sys, b):
     def v3(c):
         return p[c:c + 3].copy()
 
+    M_A = p[L.BP_ADDED_COUPLING:L.BP_ADDED_COUPLING + 36].reshape(6, 6).copy()
+    M_A[np.diag_indices(6)] = np.r_[v3(L.BP_ADDED_MASS), v3(L.BP_ADDED_INERTIA)]
     return dict(mass=p[L.BP_MASS], volume=p[L.BP_VOLUME], area=p[L.BP_AREA], length=p[L.BP_LENGTH],
                 r_G=v3(L.BP_CG), r_B=v3(L.BP_CB), I_G=v3(L.BP_INERTIA), rot_lin=v3(L.BP_ROT_DAMPING),
                 rot_quad=v3(L.BP_QUAD_ROT_DAMPING), lift_slope=p[L.BP_LIFT_SLOPE], added_mass=v3(L.BP_ADDED_MASS),
-                added_inertia=v3(L.BP_ADDED_INERTIA), r_aft=v3(L.BP_AFT_TOW_POINT))
+                added_inertia=v3(L.BP_ADDED_INERTIA), r_aft=v3(L.BP_AFT_TOW_POINT), M_A=M_A,
+                coriolis=bool(p[L.BP_ADDED_CORIOLIS] != 0.0))
 
 
 def _coefficients_np(theta, inc, cd, cl, cm):
@@ -336,6 +339,18 @@ def body_loads_np(sys, b, lam, vbody, omega, cur_global):
         m = m + q * L * np.array([0.0, -cm_v, cm_h])
         bdiag = qa * V * (2.0 * cd + P["lift_slope"])
     m = m - (qa * L * L * V * P["rot_lin"] * omega + qa * P["rot_quad"] * L ** 3 / 32.0 * omega * np.abs(omega))
+    if P["coriolis"]:
+        # added mass in Fossen's form: −C_A(ν)ν = −[[0, −S(p)], [−S(p), −S(h)]] ν with (p, h) = M_A ν, ν = the tow
+        # point's velocity relative to the water; plus M_A (ω × v, 0) because the mass matrix multiplies the
+        # inertial acceleration v̇ + ω × v; minus the −ω × (A₂₂ ω) already in the gyroscopic term
+        v = np.asarray(vbody, float) - lam @ np.asarray(cur_global, float)
+        nu = np.r_[v, omega]
+        ph = P["M_A"] @ nu
+        pp, hh = ph[:3], ph[3:]
+        C = np.block([[np.zeros((3, 3)), -_skew(pp)], [-_skew(pp), -_skew(hh)]])
+        extra = -C @ nu + P["M_A"] @ np.r_[np.cross(omega, v), np.zeros(3)]
+        f = f + extra[:3]
+        m = m + extra[3:] + np.cross(omega, P["M_A"][3:, 3:] @ omega)
     return f, m, bdiag
 
 
@@ -347,13 +362,15 @@ def _skew(a):
 def body_mass_blocks_np(sys, b):
     """(A_tt, A_tr, A_rr) of M_RB + M_A about the tow point (model.md 3.2); A_rt = A_trᵀ.
 
-    M_RB = [[m𝟙, −m S(r_G)], [m S(r_G), I_o]], I_o = I_G + m(|r_G|²𝟙 − r_G r_Gᵀ); diagonal added mass."""
+    M_RB = [[m𝟙, −m S(r_G)], [m S(r_G), I_o]], I_o = I_G + m(|r_G|²𝟙 − r_G r_Gᵀ); M_A the 6×6 added mass about
+    the tow point (diagonal unless the scene gives a matrix)."""
     P = body_params(sys, b)
     m, rG = P["mass"], P["r_G"]
-    A_tt = m * _I3 + np.diag(P["added_mass"])
-    A_tr = -m * _skew(rG)
+    M_A = P["M_A"]
+    A_tt = m * _I3 + M_A[:3, :3]
+    A_tr = -m * _skew(rG) + M_A[:3, 3:]
     I_o = np.diag(P["I_G"]) + m * (rG @ rG * _I3 - np.outer(rG, rG))
-    A_rr = I_o + np.diag(P["added_inertia"])
+    A_rr = I_o + M_A[3:, 3:]
     return A_tt, A_tr, A_rr
 
 
