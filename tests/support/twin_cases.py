@@ -112,8 +112,17 @@ def kirchhoff_scene(**kw):
     return sc
 
 
+def splice_scene(**kw):
+    """A heavy tow cable spliced to a lighter, thicker, softer one that carries the fish (issue 18, item 3); the fish
+    has a constant thruster force (``external_force``)."""
+    lower = _cable("lower", 30.0, 4, {"splice": "tow"}, {"body": "fish"})
+    lower.update(diameter=0.03, mass_per_length=0.9, EA=2.0e6, cn=1.5)
+    return _scene("splice", [_cable("tow", 60.0, 6, "vessel", "free"), lower],
+                  [_fish("fish", external_force=[4.0, -2.0, -15.0])], **kw)
+
+
 SCENES = {"two_part": two_part_scene, "parallel": parallel_scene, "series": series_scene,
-          "kirchhoff": kirchhoff_scene}
+          "kirchhoff": kirchhoff_scene, "splice": splice_scene}
 
 
 def _simulator(scene):

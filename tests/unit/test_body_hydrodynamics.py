@@ -227,3 +227,24 @@ def test_bad_added_mass_is_refused_naming_the_field(fish, field, words):
     with pytest.raises(SceneError) as e:
         load_scene(_scene_with_fish(**fish))
     assert field in str(e.value) and words in str(e.value)
+
+
+@pytest.mark.parametrize("force", [(0.0, 0.0, -120.0), (80.0, -30.0, 50.0)])
+def test_external_force_reaches_the_vessel_in_the_statics(force):
+    """``external_force`` (thrusters holding station, global axes, at the centre of gravity): a fish on a single
+    cable at rest in still water — the cable's static pull on the vessel is the wet weight of cable and fish plus
+    the thrust, whatever the cable's inclination (no drag at rest): to 1e-6 of the weight (statics tolerance)."""
+    line = dict(name="cable", length=50.0, segments=10, diameter=0.0173, mass_per_length=1.04, EA=9.87e6,
+                top="vessel", bottom={"body": "fish"})
+    fish = dict(name="fish", kind="fish", mass=41.2, volume=0.035, inertia=[0.2, 4.0, 4.0], cg=[-0.1, 0.0, -0.2],
+                cb=[-0.1, 0.0, -0.1], added_mass=[3.0, 35.0, 35.0], reference_area=0.03, reference_length=1.2,
+                coefficients=dict(incidence_deg=[0, 10, 20, 90], drag=[0.3, 0.35, 0.45, 1.2],
+                                  lift=[0.0, 0.0, 0.0, 0.0], moment=[0.0, 0.05, 0.1, 0.1]),
+                external_force=list(force))
+    sc = dict(name="thrust", water=dict(density=1025.0, gravity=9.81), vessel=dict(speed=0.0), lines=[line],
+              bodies=[fish], solver=dict(dt=0.02))
+    sim = _simulator(sc)
+    w_cable = (1.04 - 1025.0 * np.pi * 0.0173 ** 2 / 4) * 9.81 * 50.0
+    w_fish = (41.2 - 1025.0 * 0.035) * 9.81
+    expected = np.array(force) + np.array([0.0, 0.0, -(w_cable + w_fish)])
+    np.testing.assert_allclose(sim.top_force, expected, atol=1e-6 * (w_cable + w_fish))

@@ -139,8 +139,8 @@ def test_srivastava_scene_is_table_1():
     sc = load_scene("srivastava_towed_array")
     rho, g = sc.water.density, sc.water.gravity
     tow, arr, tail = sc.line("tow_cable"), sc.line("array"), sc.line("tail")
-    assert sc.junctions("tow_cable") == [723.0] and sc.junctions("array") == [274.32]
-    assert tail.length == 30.48
+    assert arr.top.splice == "tow_cable" and tail.top.splice == "array"
+    assert (tow.length, arr.length, tail.length) == (723.0, 274.32, 30.48)
     for ln, d, w, ct in ((tow, 0.0406, 2.3349, 0.015), (arr, 0.079375, 0.0, 0.00898), (tail, 0.0254, 0.569134, 0.02168)):
         assert ln.diameter == d
         assert ln.wet_weight_per_length(sc.water) == pytest.approx(w, abs=2e-3)

@@ -400,7 +400,7 @@ def test_houbolt_step_matches_twin(name):
         assert np.min(np.linalg.eigvalsh(0.5 * (Kt + Kt.T))) > 0.0
 
 
-@pytest.mark.parametrize("name", ["two_part", "series", "kirchhoff"])
+@pytest.mark.parametrize("name", ["two_part", "series", "kirchhoff", "splice"])
 def test_fifty_houbolt_steps_match_twin(name):
     sim = _dynamic_sim(name)
     dt = sim.dt

@@ -10,6 +10,7 @@ import math
 
 from .jit import njit
 from .layout import (BK_DAMPING, BK_STIFFNESS, BP_ADDED_CORIOLIS, BP_ADDED_COUPLED, BP_ADDED_COUPLING,
+                     BP_EXTERNAL_FORCE, BP_HAS_EXTERNAL,
                      BP_ADDED_INERTIA, BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB,
                      BP_CG, BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_ROT_DAMPING,
                      BP_VOLUME)
@@ -50,7 +51,7 @@ def _table_coefficients(theta, inc, cd, cl, cm, n):
 
 @njit(cache=True)
 def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out, m_out, bdiag_out):
-    """Hydrodynamic, weight/buoyancy and rotational damping loads on rigid body ``b``.
+    """Hydrodynamic, weight/buoyancy, external (thruster) and rotational damping loads on rigid body ``b``.
 
     Body-axis force ``f_out`` acting at the tow point and moment ``m_out`` about the tow point.
     ``bp[b]`` packs the body parameters (columns: :mod:`towenv.core.layout`); ``btab[b]`` the coefficient tables
@@ -80,6 +81,20 @@ def body_loads(b, lam, vbody, omega, bp, btab_n, btab, rho, g, cur_global, f_out
     m_out[0] = mass * (yg * gb2 - zg * gb1) - rho * vol * (yb * gb2 - zb * gb1)
     m_out[1] = mass * (zg * gb0 - xg * gb2) - rho * vol * (zb * gb0 - xb * gb2)
     m_out[2] = mass * (xg * gb1 - yg * gb0) - rho * vol * (xb * gb1 - yb * gb0)
+    if bp[b, BP_HAS_EXTERNAL] != 0.0:
+        # constant external force (thrusters holding station), global axes, acting at the centre of gravity
+        fx = bp[b, BP_EXTERNAL_FORCE]
+        fy = bp[b, BP_EXTERNAL_FORCE + 1]
+        fz = bp[b, BP_EXTERNAL_FORCE + 2]
+        e0 = lam[0, 0] * fx + lam[0, 1] * fy + lam[0, 2] * fz
+        e1 = lam[1, 0] * fx + lam[1, 1] * fy + lam[1, 2] * fz
+        e2 = lam[2, 0] * fx + lam[2, 1] * fy + lam[2, 2] * fz
+        f_out[0] += e0
+        f_out[1] += e1
+        f_out[2] += e2
+        m_out[0] += yg * e2 - zg * e1
+        m_out[1] += zg * e0 - xg * e2
+        m_out[2] += xg * e1 - yg * e0
     # relative velocity of the centroid in body axes
     vc0 = lam[0, 0] * cur_global[0] + lam[0, 1] * cur_global[1] + lam[0, 2] * cur_global[2]
     vc1 = lam[1, 0] * cur_global[0] + lam[1, 1] * cur_global[1] + lam[1, 2] * cur_global[2]

@@ -28,7 +28,9 @@ BP_ADDED_COUPLING = 31      # 31-66: the 6x6 added mass about the tow point, row
                             #        and BP_ADDED_INERTIA); all 0 for a diagonal added mass
 BP_ADDED_COUPLED = 67       # 1: BP_ADDED_COUPLING has a non-zero entry, 0: diagonal added mass
 BP_ADDED_CORIOLIS = 68      # 1: the added mass's Coriolis/centripetal terms (Munk moment included) are applied
-BODY_PARAM = 69             # columns in a row
+BP_EXTERNAL_FORCE = 69      # 69-71: constant external force (thrusters), global axes, at the centre of gravity, N
+BP_HAS_EXTERNAL = 72        # 1: BP_EXTERNAL_FORCE is not zero
+BODY_PARAM = 73             # columns in a row
 
 
 # ------------------------------------------------------------------------------------------------------

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from .layout import (BODY_PARAM, BP_ADDED_CORIOLIS, BP_ADDED_COUPLED, BP_ADDED_COUPLING, BP_ADDED_INERTIA,  # noqa: F401
+                     BP_EXTERNAL_FORCE, BP_HAS_EXTERNAL,
                      BP_ADDED_MASS, BP_AFT_TOW_POINT, BP_AREA, BP_CB, BP_CG,
                      BP_INERTIA, BP_LENGTH, BP_LIFT_SLOPE, BP_MASS, BP_QUAD_ROT_DAMPING, BP_REDUCED_DOF,
                      BP_ROT_DAMPING, BP_TAIL_MASS, BP_VOLUME)
@@ -152,11 +153,13 @@ from ..scene import scene_field as _get  # noqa: E402  (the one scene accessor; 
 
 
 def _attachment(end):
-    """Normalise a line end: returns ('vessel'|'free'|'line'|'body', name, distance)."""
+    """Normalise a line end: returns ('vessel'|'free'|'line'|'splice'|'body'|'anchor', name, distance)."""
     if isinstance(end, str):
         return (end, None, None)
     if _get(end, "line") is not None:
         return ("line", _get(end, "line"), float(_get(end, "distance")))
+    if _get(end, "splice") is not None:
+        return ("splice", _get(end, "splice"), None)
     if _get(end, "body") is not None:
         return ("body", _get(end, "body"), None)
     if _get(end, "anchor") is not None:
@@ -242,7 +245,7 @@ def build_system(scene) -> System:
         ln = pending.pop(0)
         name = _get(ln, "name")
         kind, ref, dist = _attachment(_get(ln, "top"))
-        if kind == "line" and ref not in done:
+        if kind in ("line", "splice") and ref not in done:
             pending.append(ln)
             continue
         if kind == "body" and ref not in body_node_of:
@@ -252,6 +255,8 @@ def build_system(scene) -> System:
             top = vessel_node
         elif kind == "line":
             top = junction_node[(ref, dist)]
+        elif kind == "splice":
+            top = int(line_maps[ref].nodes[-1])       # the spliced line's free bottom node, shared
         elif kind == "body":
             if ref not in aft_node_of:
                 aft_node_of[ref] = new_node(PRESCRIBED_AFT)
@@ -448,6 +453,9 @@ def _rigid_body_params(b) -> np.ndarray:
         p[BP_ADDED_COUPLING:BP_ADDED_COUPLING + 36] = M.reshape(36)
         p[BP_ADDED_COUPLED] = 1.0 if np.any(M != 0.0) else 0.0
     p[BP_ADDED_CORIOLIS] = 1.0 if getattr(b, "added_mass_coriolis", False) else 0.0
+    ext = _vec(getattr(b, "external_force", (0.0, 0.0, 0.0)))
+    p[BP_EXTERNAL_FORCE:BP_EXTERNAL_FORCE + 3] = ext
+    p[BP_HAS_EXTERNAL] = 1.0 if np.any(ext != 0.0) else 0.0
     p[BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3] = _vec(b.aft_tow_point if b.aft_tow_point is not None else (0.0, 0.0, 0.0))   # none: unused
     p[BP_REDUCED_DOF] = 1.0 if b.dof == "surge_heave_pitch" else 0.0
     return p

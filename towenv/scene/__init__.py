@@ -31,7 +31,8 @@ from .loading import _embedded_names, _load_file, _validate, list_scenes, load_s
 __all__ = [
     "scene_field",
     "SceneError", "Scene", "Water", "Current", "Vessel", "TurnManoeuvre", "SpeedChangeManoeuvre",
-    "SinusoidExcitation", "TimeSeriesExcitation", "Ramp", "Line", "JunctionAttachment", "BodyAttachment",
+    "SinusoidExcitation", "TimeSeriesExcitation", "Ramp", "Line", "JunctionAttachment", "SpliceAttachment",
+    "BodyAttachment",
     "PointBody", "RigidBody", "CoefficientTable", "Solver", "ManoeuvreWindow",
     "load_scene", "list_scenes", "scene_path", "DEFAULT_SCENE", "SCENES_DIR", "SCENE_DATA_DIR",
     "MAX_SEGMENTS",

@@ -342,6 +342,12 @@ class JunctionAttachment(_Model):
     distance: Num(gt=0, unit="m")
 
 
+class SpliceAttachment(_Model):
+    """Top of a line spliced to the bottom end of another line (which must end ``"free"``): the two lines share
+    that node, each with its own properties on its side — one cable of piecewise properties."""
+    splice: Name
+
+
 class BodyAttachment(_Model):
     """A body: as a line ``bottom`` its tow point; as a line ``top`` its ``aft_tow_point``."""
     body: Name
@@ -357,11 +363,15 @@ def _top_disc(v):
         return "@vessel" if v == "vessel" else None
     if isinstance(v, JunctionAttachment):
         return "@junction"
+    if isinstance(v, SpliceAttachment):
+        return "@splice"
     if isinstance(v, BodyAttachment):
         return "@body_top"
     if isinstance(v, Mapping):
         if "line" in v:
             return "@junction"
+        if "splice" in v:
+            return "@splice"
         if "body" in v:
             return "@body_top"
     return None
@@ -379,7 +389,7 @@ def _bottom_disc(v):
 
 Top = Annotated[
     Union[Annotated[Literal["vessel"], Tag("@vessel")], Annotated[JunctionAttachment, Tag("@junction")],
-          Annotated[BodyAttachment, Tag("@body_top")]],
+          Annotated[SpliceAttachment, Tag("@splice")], Annotated[BodyAttachment, Tag("@body_top")]],
     Discriminator(_top_disc, custom_error_type="bad_top", custom_error_message="invalid top attachment"),
 ]
 
@@ -447,9 +457,12 @@ class Line(_Model):
 
     @property
     def top_kind(self) -> str:
-        """``"vessel"``, ``"line"`` (junction) or ``"body"`` (a body's aft tow point)."""
+        """``"vessel"``, ``"line"`` (junction), ``"splice"`` (the bottom end of another line) or ``"body"`` (a body's
+        aft tow point)."""
         if isinstance(self.top, JunctionAttachment):
             return "line"
+        if isinstance(self.top, SpliceAttachment):
+            return "splice"
         if isinstance(self.top, BodyAttachment):
             return "body"
         return "vessel"
@@ -583,6 +596,8 @@ class RigidBody(_BodyBase):
     # the added mass's Coriolis/centripetal terms (Kirchhoff; they include the Munk moment): off by default
     # because measured moment tables already contain the Munk moment (docs/scene-format.md)
     added_mass_coriolis: bool = False
+    # a constant force in global axes at the centre of gravity: thrusters holding the body's station
+    external_force: Vec3(abs_le=1e7, unit="N") = (0.0, 0.0, 0.0)
     reference_area: Num(gt=0, unit="m^2")
     reference_length: Num(gt=0, unit="m")
     coefficients: CoefficientTable
@@ -645,7 +660,8 @@ Body = Annotated[
 
 _TAG_CLASSES = {
     "@turn": TurnManoeuvre, "@speed_change": SpeedChangeManoeuvre, "@sinusoid": SinusoidExcitation,
-    "@time_series": TimeSeriesExcitation, "@junction": JunctionAttachment, "@body_top": BodyAttachment,
+    "@time_series": TimeSeriesExcitation, "@junction": JunctionAttachment, "@splice": SpliceAttachment,
+    "@body_top": BodyAttachment,
     "@body_bottom": BodyAttachment, "@rigid": RigidBody, "@point": PointBody, "@vessel": None, "@free": None,
 }
 
@@ -827,6 +843,7 @@ class Scene(_Model):
         refs_ok = True
         roots: list[int] = []
         bottom_of: dict[str, list[int]] = {}
+        spliced_to: dict[str, str] = {}
         for i, ln in enumerate(lines):
             top = ln.top
             if isinstance(top, JunctionAttachment):
@@ -842,6 +859,27 @@ class Scene(_Model):
                         probs.append((f"lines[{i}].top.distance",
                                       f"must be < {parent.length:g} m, the length of line {top.line!r} "
                                       f"(junction beyond the line's end) (got {top.distance!r})"))
+            elif isinstance(top, SpliceAttachment):
+                if top.splice not in line_idx:
+                    refs_ok = False
+                    probs.append((f"lines[{i}].top.splice", f"unknown line {top.splice!r} (known lines: {known_lines})"))
+                elif top.splice == ln.name:
+                    refs_ok = False
+                    probs.append((f"lines[{i}].top.splice", f"a line cannot be spliced to itself (got {top.splice!r})"))
+                else:
+                    parent = lines[line_idx[top.splice]]
+                    if parent.bottom != "free":
+                        refs_ok = False
+                        probs.append((f"lines[{i}].top.splice",
+                                      f"line {top.splice!r} must end free (bottom = \"free\") to be continued by a "
+                                      f"splice; its bottom is {parent.bottom!r}"))
+                    elif top.splice in spliced_to:
+                        refs_ok = False
+                        probs.append((f"lines[{i}].top.splice",
+                                      f"line {top.splice!r} is already continued by line {spliced_to[top.splice]!r} "
+                                      f"(one line per splice; hang more lines from a junction)"))
+                    else:
+                        spliced_to[top.splice] = ln.name
             elif isinstance(top, BodyAttachment):
                 if top.body not in body_idx:
                     refs_ok = False
@@ -892,6 +930,8 @@ class Scene(_Model):
             def parent(ln: Line) -> str | None:
                 if isinstance(ln.top, JunctionAttachment):
                     return ln.top.line
+                if isinstance(ln.top, SpliceAttachment):
+                    return ln.top.splice
                 if isinstance(ln.top, BodyAttachment):
                     return lines[bottom_of[ln.top.body][0]].name
                 return None

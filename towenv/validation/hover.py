@@ -31,8 +31,10 @@ RAYLEIGH_MEAN_1000 = S.rayleigh_mean_of_highest(1 / 1000)        # 3.966 sqrt(m0
 # -------------------------------------------------------------------------------------------------
 # scenes
 # -------------------------------------------------------------------------------------------------
-def planar_scene() -> dict:
-    """``hover_deep_tow`` with a flat (2.0) horizontal-plane drag table.
+def planar_scene(as_stated: bool = True) -> dict:
+    """``hover_deep_tow`` with a flat (2.0) horizontal-plane drag table and (``as_stated``) the towfish's added
+    mass at r_a as the paper states it (:func:`added_mass_at_ra`; ``False``: the embedded scene's diagonal
+    approximation at the tow point).
 
     Hover's model is planar, so the horizontal table only matters through the sideslip term of
     towenv's drag law ``C_D = C_Dv(θ_v) + C_Dh(θ_h) − C_Dv(0)``. At zero speed the fish's surge velocity
@@ -40,9 +42,32 @@ def planar_scene() -> dict:
     drag of the heaving fish becomes 14 instead of 8 (×1.75): see the report's "simulator problems". A flat
     horizontal table (C_Dh ≡ C_Dv(0)) leaves exactly Hover's planar drag law."""
     d = load_scene("hover_deep_tow").to_dict()
+    if as_stated:
+        d = added_mass_at_ra(d)
     h = d["bodies"][0]["horizontal_coefficients"]
     h["drag"] = [2.0] * len(h["drag"])
     d["name"] = "hover_deep_tow_planar"
+    return d
+
+
+#: Hover's added-mass centre r_a in towenv's body axes (from the tow point, z up): r_aP = −0.05 m aft of the
+#: centre of mass, which is r_cQ = 0.8 m below the tow point
+R_A = (-0.05, 0.0, -R_CQ)
+
+
+def added_mass_at_ra(d: dict) -> dict:
+    """Hover's towfish added mass as the paper states it (issue 18, items 1 and 4): the translational added masses
+    M_aP = M_aQ = 500 kg (and 500 kg in sway, not given) act at r_a, given as a 6×6 matrix about r_a. Moved to the
+    tow point it carries the pitch inertia M_a(0.8² + 0.05²) = 321.25 kg m² the embedded scene approximates it by
+    *and* the coupling of the tow point's surge and heave accelerations into pitch that the diagonal form lacks
+    (Hover eq. 15–17: −r_aP M_aQ V̇ about the centre of mass; 400 N m per m/s² of surge about the tow point).
+    The embedded ``hover_deep_tow`` keeps the diagonal approximation (the pre-chart bit-identity reference runs it)."""
+    d = copy.deepcopy(d)
+    b = d["bodies"][0]
+    b["added_mass_matrix"] = np.diag([MA_Q, MA_Q, MA_Q, 0.0, 0.0, 0.0]).tolist()
+    b["added_mass_reference"] = list(R_A)
+    b["added_mass"] = [0.0, 0.0, 0.0]
+    b["added_inertia"] = [0.0, 0.0, 0.0]
     return d
 
 
@@ -62,6 +87,8 @@ def cg_mapped(d: dict) -> dict:
     b["cb"] = [0.0, 0.0, -(b["mass"] * G * R_CQ - righting) / (RHO * G * b["volume"])]
     b["added_mass"] = [0.0, 0.0, 0.0]
     b["added_inertia"] = [0.0, 0.0, 0.0]
+    b.pop("added_mass_matrix", None)
+    b.pop("added_mass_reference", None)
     b["inertia"] = [b["inertia"][0], 280.0, 280.0]
     return d
 
@@ -319,14 +346,13 @@ def s_shape_scene() -> dict:
     Af = (HOVER_S_FLOAT_BUOYANCY / G + M_CAB - RHO * Ac) / (RHO - FOAM_DENSITY)
     Df = math.sqrt(4 * (Ac + Af) / math.pi)
     mf = M_CAB + FOAM_DENSITY * Af
-    stub = 0.2
     upper_len = HOVER_S_CABLE_LENGTH - HOVER_S_FLOAT_LENGTH
-    up = dict(cab, name="upper", length=upper_len + stub, segments=[26, 1], top="vessel", bottom="free")
+    up = dict(cab, name="upper", length=upper_len, segments=26, top="vessel", bottom="free")
     # Hover's model changes only w_0 along the floated part: keep the bare cable's drag and added mass per
     # unit length (C_d d, m_a) by scaling the coefficients to the jacket diameter
     low = dict(cab, name="floated", length=HOVER_S_FLOAT_LENGTH, segments=15, diameter=Df, mass_per_length=mf,
                cn=1.6 * D_CAB / Df, ct=C_T * D_CAB / Df, can=0.2 / (RHO * math.pi * Df ** 2 / 4),
-               top={"line": "upper", "distance": upper_len}, bottom={"body": "towfish"})
+               top={"splice": "upper"}, bottom={"body": "towfish"})
     d["lines"] = [up, low]
     d["bodies"][0]["volume"] = (M_FISH * G - HOVER_S_ROV_WET_WEIGHT) / (RHO * G)
     d["current"] = {"velocity": [HOVER_S_CURRENT, 0.0, 0.0]}
@@ -334,6 +360,30 @@ def s_shape_scene() -> dict:
     d["name"] = "hover_s_shape"
     d["_float"] = {"D": Df, "m": mf}
     return d
+
+
+def rov_held_at_depth(sd: dict, depth: float = HOVER_S_ROV_DEPTH) -> tuple[dict, float]:
+    """Hover's Example 2 as stated (issue 18, item 4): "the depth of the ROV is taken to be only 100 m", its
+    in-water weight 500 N "as easily achieved with thrusters". towenv's free ROV settles shallower (its static
+    shape is set by the cable), so the ROV is held at ``depth`` by a constant vertical thruster force F_z
+    (``external_force``, the station-keeping force, found by root finding on the statics; a horizontal force
+    cannot take it deeper than ~86 m). Returns (scene with the force, F_z in N, + up). The force stays constant in
+    the dynamics: the thrusters hold the mean, the waves' motion passes through the cable as in Hover's model."""
+    from ..core.simulator import Simulator
+
+    def scene(fz):
+        d = copy.deepcopy(sd)
+        d["bodies"][0]["external_force"] = [0.0, 0.0, float(fz)]
+        return d
+
+    def miss(fz):
+        return -float(Simulator(scene(fz)).body_state("towfish")["position"][2]) - depth
+
+    lo, hi = -400.0, 400.0
+    if not miss(lo) > 0.0 > miss(hi):
+        raise RuntimeError(f"S-shape: no vertical thrust in [{lo:g}, {hi:g}] N holds the ROV at {depth:g} m")
+    fz = brentq(miss, lo, hi, xtol=1e-4)
+    return scene(fz), float(fz)
 
 
 def run(ctx: CaseContext) -> dict:
@@ -346,30 +396,35 @@ def run(ctx: CaseContext) -> dict:
     seeds = (1,) if quick else (1, 2, 3)
     comp_cases = ([(5, "locked"), (5, "b-tuned")] if quick else
                   [(c, m) for c in (5, 6) for m in ("locked", "k-tuned", "b-tuned")])
-    n_runs = (len(omegas) * (1 if quick else 2) + len(s_omegas) + 1 + (0 if quick else 2)
+    n_runs = (len(omegas) * (1 if quick else 3) + len(s_omegas) + 2 + (0 if quick else 4)
               + len(comp_cases) * (len(seeds) + (0 if quick else 1))
               + (0 if quick else len(DEEP_TOW_READINGS) * len(READING_OMEGAS)))
     bar = ctx.bar(n_runs, "Hover et al.")
     values = {}
 
     # ---- 3a frequency response ------------------------------------------------------------------
-    fr_rows, fr = [], {"omega": [], "sim": [], "emb": [], "cf": []}
+    fr_rows, fr = [], {"omega": [], "sim": [], "emb": [], "cf": [], "diag": []}
     planar = planar_scene()
+    planar_diag = planar_scene(as_stated=False)
     emb = load_scene("hover_deep_tow").to_dict()
     for om in omegas:
         r, out = _freq_run(_sinusoid(planar, om), om)
         bar.step(f"ω={om}")
-        re = None
+        re = rd = None
         if not quick:
             re, _ = _freq_run(_sinusoid(emb, om), om)
             bar.step(f"ω={om} emb")
+            rd, _ = _freq_run(_sinusoid(planar_diag, om), om)
+            bar.step(f"ω={om} diagonal added mass")
+        fr["diag"].append(rd)
         c = _closed_form(om)
         fr["omega"].append(om)
         fr["sim"].append(r)
         fr["emb"].append(re)
         fr["cf"].append({"Q": abs(complex(c.p1)), "T1": abs(complex(c.T1)), "Tn": abs(complex(c.Tn))})
-        fr_rows.append([om, r["Q"], fr["cf"][-1]["Q"], r["P"], r["pitch_deg"], r["T1"], fr["cf"][-1]["T1"],
-                        r["Tn"], fr["cf"][-1]["Tn"], r["T1_min"], re["Q"] if re else None, re["T1"] if re else None])
+        fr_rows.append([om, r["Q"], fr["cf"][-1]["Q"], r["P"], r["pitch_deg"], rd["pitch_deg"] if rd else None,
+                        r["T1"], fr["cf"][-1]["T1"], r["Tn"], fr["cf"][-1]["Tn"], r["T1_min"], re["Q"] if re else None,
+                        re["T1"] if re else None])
     values["freq"] = {"omega": fr["omega"], "Q": [x["Q"] for x in fr["sim"]], "T1": [x["T1"] for x in fr["sim"]],
                       "Tn": [x["Tn"] for x in fr["sim"]], "T1_min": [x["T1_min"] for x in fr["sim"]],
                       "Q_cf": [x["Q"] for x in fr["cf"]]}
@@ -460,10 +515,13 @@ def run(ctx: CaseContext) -> dict:
                                           "grid": [len(kg), len(bg)]} for c, t in lin_tune.items()}
 
     # ---- 3c S-shape -------------------------------------------------------------------------------
-    sd = s_shape_scene()
-    flt = sd.pop("_float")
+    sd_free = s_shape_scene()
+    flt = sd_free.pop("_float")
+    sd, f_hold = rov_held_at_depth(sd_free)
+    bar.step("S station keeping")
+    free0 = run_scene(sd_free, 1.0).result
+    bar.step("S statics, free ROV")
     st_out = run_scene(sd, 1.0)
-    bar.step("S statics")
     s0 = st_out.result
     top_seg = s0.lines["upper"]["positions"][0, 1] - s0.lines["upper"]["positions"][0, 0]
     tdir = top_seg / np.linalg.norm(top_seg)
@@ -479,12 +537,26 @@ def run(ctx: CaseContext) -> dict:
         s_rows.append([om, r["P"], 20 * math.log10(max(r["P"], 1e-12)), r["Q"], 20 * math.log10(max(r["Q"], 1e-12)),
                        r["pitch_deg"], r["T1"], r["Tn"], r["T1_min"]])
     s_cg = None
+    free_rows = []
     if not quick:
         r_cg, _ = _freq_run(_sinusoid(cg_mapped(sd), 1.25, axis_dir=axis), 1.25, bottom_line="floated")
         bar.step("S cg-mapped")
         s_cg = r_cg["pitch_deg"] if r_cg else None
+        ftop = free0.lines["upper"]["positions"][0, 1] - free0.lines["upper"]["positions"][0, 0]
+        fdir = ftop / np.linalg.norm(ftop)
+        for om in (0.8, 1.25):
+            rf, _ = _freq_run(_sinusoid(sd_free, om, axis_dir=(float(-fdir[0]), float(-fdir[2]))), om,
+                              bottom_line="floated")
+            bar.step(f"S free ROV ω={om}")
+            held = s_res[s_omegas.index(om)] if om in s_omegas else None
+            if rf is not None:
+                free_rows.append([om, rf["P"], held["P"] if held else None, rf["Q"], held["Q"] if held else None,
+                                  rf["pitch_deg"], held["pitch_deg"] if held else None])
     rov = s0.bodies["towfish"]["position"][0]
+    rov_free = free0.bodies["towfish"]["position"][0]
     values["s_shape"] = {"rov_depth": float(-rov[2]), "rov_x": float(rov[0]), "float_D": flt["D"],
+                         "station_keeping_force_z": f_hold, "free_rov_depth": float(-rov_free[2]),
+                         "free_rov_x": float(rov_free[0]), "free_vs_held": free_rows,
                          "T1_static": float(s0.lines["floated"]["tensions"][0, -1]), "pitch_cg_mapped_125": s_cg,
                          "float_m": flt["m"], "top_tension": float(s0.top_tension[0]),
                          "omega": s_omegas, "Q": [r["Q"] if r else None for r in s_res],
@@ -496,9 +568,11 @@ def run(ctx: CaseContext) -> dict:
     # ---- tables, claims, text ---------------------------------------------------------------------
     tables = [Table("Towfish response to a 1 m vertical top sinusoid, U = 0 (per metre of top motion): time-domain "
                     "simulation (planar-drag scene) vs Hover's appendix axial model with linearised drag "
-                    "(cf = closed form); T1 at the fish, Tn at the top; last columns: the embedded scene",
-                    ["ω (rad/s)", "|Q| heave", "|Q| cf", "|P| surge of CG", "|Φ| pitch (°)", "|T1| (N)",
-                     "|T1| cf (N)", "|Tn| (N)", "|Tn| cf (N)", "min T1 (N)", "|Q| embedded", "|T1| embedded (N)"],
+                    "(cf = closed form); T1 at the fish, Tn at the top; |Φ| diagonal: the same with the towfish's "
+                    "added mass as a diagonal at the tow point instead of at r_a; last columns: the embedded scene",
+                    ["ω (rad/s)", "|Q| heave", "|Q| cf", "|P| surge of CG", "|Φ| pitch (°)", "|Φ| diagonal (°)",
+                     "|T1| (N)", "|T1| cf (N)", "|Tn| (N)", "|Tn| cf (N)", "min T1 (N)", "|Q| embedded",
+                     "|T1| embedded (N)"],
                     fr_rows,
                     "The closed form is the appendix's axial-string model, the one Hover used for the compensator's "
                     "preliminary study; Hover's quasi-linear matrix method (§II) applied to towenv's own lumped-mass "
@@ -593,9 +667,17 @@ def run(ctx: CaseContext) -> dict:
                         "dB = 20 log10(|x| per m; Φ in rad/m)",
                         ["ω (rad/s)", "|P| (m/m)", "P (dB)", "|Q| (m/m)", "Q (dB)", "|Φ| (°/m)", "|T1| (N/m)",
                          "|Tn| (N/m)", "min T1 (N)"], s_rows,
-                        f"Static shape (towenv): ROV {fmt(values['s_shape']['rov_depth'])} m deep, "
-                        f"{fmt(values['s_shape']['rov_x'])} m down-current; top tension "
-                        f"{fmt(values['s_shape']['top_tension'])} N. Hover states 100 m depth (Fig. 6 withheld)."))
+                        f"As stated: the ROV held at {fmt(values['s_shape']['rov_depth'])} m by a constant vertical "
+                        f"thruster force of {fmt(values['s_shape']['station_keeping_force_z'])} N (the station-keeping "
+                        f"force; + up), {fmt(values['s_shape']['rov_x'])} m down-current; top tension "
+                        f"{fmt(values['s_shape']['top_tension'])} N. Left free, the ROV settles at "
+                        f"{fmt(values['s_shape']['free_rov_depth'])} m, {fmt(values['s_shape']['free_rov_x'])} m "
+                        "down-current (Fig. 6, Hover's static shape, is withheld)."))
+    if values["s_shape"]["free_vs_held"]:
+        tables.append(Table("S-shape: the free ROV (no thrust, settles shallower) against the ROV held at 100 m",
+                            ["ω (rad/s)", "|P| free", "|P| held", "|Q| free", "|Q| held", "|Φ| free (°/m)",
+                             "|Φ| held (°/m)"], values["s_shape"]["free_vs_held"],
+                            "Per metre of axial top motion; the held case is the one the claims use."))
 
     if readings is not None:
         tables.append(Table("Readings of the deep-tow conditions (Hover §IV-B: 'excited by a one-meter sinusoid', "
@@ -706,10 +788,18 @@ def run(ctx: CaseContext) -> dict:
         "nonlinearity whose first harmonic a describing function captures only roughly (the pitch also has "
         "strong higher harmonics in the simulation). Heave and tension, dominated by the axial dynamics, are "
         "not affected.",
-        "Hover's towfish pitch model has the added mass acting at r_a (0.05 m aft of the centre of mass); towenv's added "
-        "mass is diagonal at the tow point, so the pitch forcing by heave acceleration is missing (approximated by "
-        "added inertia, docs/scenes.md). Pitch amplitudes are therefore not comparable in detail.",
     ]
+    dg = [(om, x["pitch_deg"], y["pitch_deg"]) for om, x, y in zip(fr["omega"], fr["sim"], fr["diag"]) if x and y]
+    if dg:
+        om_w, p_ra, p_dg = max(dg, key=lambda z: abs(z[1] / z[2] - 1.0) if z[2] > 0 else 0.0)
+        values["pitch_ra_vs_diagonal"] = {"omega": om_w, "at_ra": p_ra, "diagonal": p_dg}
+        findings.append(
+            "Hover's towfish added mass as stated (issue 18, item 1): the translational added masses act at r_a, "
+            "0.05 m aft of and 0.8 m below the tow point — now given as a 6×6 added-mass matrix about r_a, which "
+            "couples the tow point's surge and heave accelerations into pitch. Against the diagonal approximation "
+            "used before (the same pitch inertia about the tow point, no coupling) the towfish pitch changes by up "
+            f"to {100 * (p_ra / p_dg - 1):+.0f} % (|Φ| {fmt(p_ra)}° against {fmt(p_dg)}° per m at ω = {fmt(om_w)} "
+            "rad/s); heave and tensions, set by the cable's axial dynamics, do not (table above).")
     fails = [f"SS{c} {m} seed {sd_} (t = {t:.0f} s)" for (c, m), e in comp.items() for sd_, t in e["failed"]]
     if fails:
         disagreements.append(
@@ -718,12 +808,13 @@ def run(ctx: CaseContext) -> dict:
             "while slack and can spin up until the Newton iteration fails (simulator problem 3). Hover's quasi-linear "
             "method cannot see slack at all; the statistics of these runs (when ≥ 300 s were completed) use the "
             "record up to the failure.")
-    if ss["rov_depth"] < HOVER_S_ROV_DEPTH - 5:
-        disagreements.append(
-            f"S-shape statics: the ROV settles at {fmt(ss['rov_depth'])} m, not the 100 m Hover states. The floated "
-            "section must be thicker in towenv (a cable's buoyancy comes from its diameter; Hover just changes w_0), "
-            "so its weight/buoyancy distribution per length is right but its geometry is an assumption; Fig. 6 (the "
-            "static shape) is withheld, so the difference cannot be traced further.")
+    findings.append(
+        f"S-shape statics as stated (the ROV at {HOVER_S_ROV_DEPTH:g} m): left free, towenv's ROV settles at "
+        f"{fmt(ss['free_rov_depth'])} m; holding it at {HOVER_S_ROV_DEPTH:g} m takes a constant vertical thruster "
+        f"force of {fmt(ss['station_keeping_force_z'])} N ({fmt(100 * abs(ss['station_keeping_force_z']) / HOVER_S_ROV_WET_WEIGHT)} % "
+        "of the ROV's 500 N in-water weight; a horizontal force cannot take it below ~86 m). The floated section "
+        "is thicker in towenv (a cable's buoyancy comes from its diameter; Hover just changes w_0), so its weight "
+        "per length is right but its geometry is an assumption; Fig. 6 (the static shape) is withheld.")
     for c in claims:
         if not c["holds"]:
             why = ""
@@ -733,14 +824,12 @@ def run(ctx: CaseContext) -> dict:
                 wp = math.sqrt((t1s * R_CQ + bS * 0.02) / 280.0)
                 why = (" Hover's 6° at 1.25 rad/s lies at the ROV's pitch natural frequency about its centre of mass "
                        f"in his model, √((T1 r_cQ + B r_bQ)/J) = √(({fmt(t1s)}·{R_CQ} + {fmt(bS)}·0.02)/280) = "
-                       f"{wp:.2f} rad/s. towenv "
-                       "puts the translational added mass at the tow point and represents Hover's added-mass offset "
-                       "by extra pitch inertia (exact only for rotation about a fixed tow point), which moves that "
-                       "resonance" + (f"; with the added mass carried at the centre of mass instead (`cg_mapped`, "
-                                      f"exact for free rotation) the pitch at 1.25 rad/s is "
-                                      f"{fmt(values['s_shape']['pitch_cg_mapped_125'])}°/m, so the inertia mapping "
-                                      "is not the cause, which remains unidentified."
-                                      if values["s_shape"]["pitch_cg_mapped_125"] is not None else "."))
+                       f"{wp:.2f} rad/s. towenv now carries the ROV's added mass at r_a as Hover states it (a 6×6 "
+                       "matrix about r_a)" + (f"; with the added mass carried at the centre of mass instead "
+                                              f"(`cg_mapped`) the pitch at 1.25 rad/s is "
+                                              f"{fmt(values['s_shape']['pitch_cg_mapped_125'])}°/m, so the added-mass "
+                                              "mapping is not the cause, which remains unidentified."
+                                              if values["s_shape"]["pitch_cg_mapped_125"] is not None else "."))
             disagreements.append(f"Not reproduced: {c['claim']} — {c['evidence']}.{why}")
     miss = {c: 100 * (comp[(c, "b-tuned")]["stats"]["R_1000_level"] / HOVER_TRAVEL - 1)
             for c in (5, 6) if (c, "b-tuned") in comp and comp[(c, "b-tuned")]["stats"]}
@@ -785,17 +874,23 @@ def run(ctx: CaseContext) -> dict:
         "sources": [f"{HOVER}, Table II, §III, §IV-A/B/C, appendix (Figs 2–9 and Tables III–V not in the seed copy)"],
         "inputs": [
             "Embedded scene `hover_deep_tow` (every Table II value; 4000 m, 20 segments, 400 kg drag-only towfish, "
-            "U = 0), with its horizontal drag table flattened (planar drag law; see assumptions).",
+            "U = 0), with its horizontal drag table flattened (planar drag law; see assumptions) and the towfish's "
+            "translational added mass at Hover's r_a as a 6×6 matrix (the embedded scene approximates it by a diagonal "
+            "at the tow point).",
             f"Frequency response: 1 m vertical top sinusoid at {len(omegas)} frequencies in {fmt(min(omegas))}–"
             f"{fmt(max(omegas))} rad/s, ≥ 8 periods "
             "and ≥ 240 s per frequency, fundamental fitted over the last 4 periods.",
             "Compensator: m_comp = 530 kg (Table II), spring and dashpot between deck and cable top (Hover eq. 27), "
             f"sea states 5 and 6, travel 4.0 m; {comp_dur - 100:.0f} s analysed per run after a 100 s start-up, "
             f"{len(seeds)} wave seed(s) pooled.",
-            "S-shape: ROV wet weight 500 N, lower 75 m floated to 10.2 N/m net buoyancy, 205 m cable, U = 0.2 m/s, "
+            "S-shape: ROV wet weight 500 N held at 100 m depth (a constant vertical thruster force), lower 75 m floated "
+            "to 10.2 N/m net buoyancy and spliced to the upper 130 m, 205 m cable, U = 0.2 m/s, "
             "1 m axial top excitation at 0.05–1.5 rad/s.",
         ],
         "assumptions": [
+            "S-shape: the ROV is held at Hover's 100 m by a constant vertical thruster force (found from the statics, "
+            "reported in the findings) — Hover gives the depth, not how it is held; the force does not respond to the "
+            "waves.",
             "Deep-tow conditions as read: 'excited by a one-meter sinusoid' = 1 m amplitude, and the cable's printed "
             "mass and diameter (w0 7.83 N/m; Table II prints 8.14 N/m) — the evidence for the first and the "
             "sensitivity to both are in the readings table and the findings.",
@@ -819,8 +914,8 @@ def run(ctx: CaseContext) -> dict:
             "is undamped.",
             f"S-shape floats: a syntactic-foam jacket ({FOAM_DENSITY:.0f} kg/m³, Ø {fmt(1000 * values['s_shape']['float_D'])} mm, "
             f"{fmt(values['s_shape']['float_m'])} kg/m) gives the {HOVER_S_FLOAT_BUOYANCY} N/m; its drag and added mass per "
-            "length are kept equal to the bare cable's (Hover only changes w_0); junction device with a 0.2 m stub "
-            "joins the heavy and floated sections.",
+            "length are kept equal to the bare cable's (Hover only changes w_0); the heavy and floated sections are "
+            "spliced (a shared node).",
         ],
         "tables": [t.to_dict() for t in tables], "figures": [x.to_dict() for x in figs],
         "findings": findings, "disagreements": disagreements, "claims": claims, "values": values,

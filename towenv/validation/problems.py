@@ -81,21 +81,24 @@ def series_connector() -> dict:
     ref = run_scene(ok, 60.0, record_interval=1.0)
     text = (
         "**Series (aft-tow-point) coupling can diverge under large tail tensions.** Joining cable sections of "
-        "different properties through a small rigid body's `aft_tow_point` (the only way to chain lines "
-        "end-to-end) can fail for the Srivastava array in a *steady* 4 m/s tow (tow-point tension "
+        "different properties through a small rigid body's `aft_tow_point` (until 2026-12 the only way to chain "
+        "lines end to end) can fail for the Srivastava array in a *steady* 4 m/s tow (tow-point tension "
         f"{fmt(rows[0][3] / 1e3)} kN): " +
         "; ".join(f"Δt = {dt} s: " + (f"diverged at t = {t:.1f} s ({err.split(': ', 1)[1][:90]}…)" if err else
                                       "completed 60 s") for dt, err, t, _ in rows) +
-        f". The same system joined by junctions runs {'without problems' if ref.ok else 'into trouble too'} "
+        f". The same system spliced (`top = {{splice = ...}}`, no connector body) runs "
+        f"{'without problems' if ref.ok else 'into trouble too'} "
         f"({ref.stats.get('step_cuts', 0)} step cuts, {ref.stats.get('mean_iterations', 0):.2f} Newton iterations "
         "per step). The block Gauss–Seidel coupling of docs/model-notes.md (tail force treated as a load inside the "
         "Newton loop) has a gain of about m_tail/m_body; it is now relaxed with the tail's stiffness "
         "(docs/model-notes.md, \"Series coupling — relaxation\"), which made the Table 4.2 series tow converge at "
         "long steps, but for these 50 kg connectors towing hundreds of metres of array the diagonal relaxation is "
         "not enough at the longer step (the connector's pitch period, ~0.2 s, is shorter than the step, and its "
-        "rotation couples with its translation). The validation uses junctions with 0.2 m free stubs instead (scene "
-        "`srivastava_towed_array`). Suggested fix: an explicit 'splice' attachment (bottom of one line = top of "
-        "the next, same node) in the scene format and the tree solver.")
+        "rotation couples with its translation). Sections that need no body between them are now spliced (a shared "
+        "node in the tree tension solve; scene `srivastava_towed_array`, which used junctions with 0.2 m free "
+        "stubs before). Not fixed: a connector that must be a rigid body (a 50 kg body with an aft tow point) "
+        "still needs the shorter step — a monolithic coupling of the aft tow point is the open part of issue 18, "
+        "item 3.")
     return {"title": "Series coupling divergence for long arrays", "text": text,
             "values": {"runs": [[r[0], r[1] is None, r[2]] for r in rows], "junction_ok": ref.ok}}
 

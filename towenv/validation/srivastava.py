@@ -34,11 +34,10 @@ def scene_for(manoeuvre: str, current: str, ramp: float = RAMP, base: dict | Non
 
 
 def _series(res):
-    """Array front (junction on the tow cable), array end (tail junction), tail end: depth histories."""
+    """Array front (splice to the tow cable), array end (splice to the tail), tail end: depth histories."""
     arr = res.lines["array"]["positions"]
-    n_arr = arr.shape[1] - 2          # the array line's node at 274.32 m (the last node is the 0.2 m stub's end)
     tail = res.lines["tail"]["positions"]
-    return {"front": -arr[:, 0, 2], "end": -arr[:, n_arr, 2], "tail": -tail[:, -1, 2]}
+    return {"front": -arr[:, 0, 2], "end": -arr[:, -1, 2], "tail": -tail[:, -1, 2]}
 
 
 def _profile(res, k):
@@ -46,11 +45,11 @@ def _profile(res, k):
     tow = res.lines["tow_cable"]
     arr = res.lines["array"]
     tail = res.lines["tail"]
-    p = np.concatenate([tow["positions"][k, :-1], arr["positions"][k, 1:-1], tail["positions"][k, 1:]])
+    p = np.concatenate([tow["positions"][k], arr["positions"][k, 1:], tail["positions"][k, 1:]])   # shared nodes once
     x0 = res.tow_point[k]
     trail = x0[0] - p[:, 0]
     depth = -(p[:, 2] - x0[2])
-    tens = np.concatenate([tow["tensions"][k, :-1], arr["tensions"][k, :-1], tail["tensions"][k]])
+    tens = np.concatenate([tow["tensions"][k], arr["tensions"][k], tail["tensions"][k]])
     seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
     s_mid = np.cumsum(seg) - 0.5 * seg
     return trail, depth, s_mid, tens
@@ -188,9 +187,9 @@ def run(ctx: CaseContext) -> dict:
         "The paper also leaves out the ramp time T, EA and the mass per length; the sensitivity table shows how "
         "much the ramp time and the drag convention matter.",
         "The paper's model is a free-ended cable (no towed body) solved by an implicit finite-difference method "
-        "(Ablow–Schechter type); towenv's lumped-mass model uses the same drag law. The array sections are joined "
-        "through junctions with 0.2 m stubs because towenv's series (aft-tow-point) coupling diverges for this "
-        "system (simulator problems).",
+        "(Ablow–Schechter type); towenv's lumped-mass model uses the same drag law. The sections are spliced end to "
+        "end (shared nodes, one tree tension solve); until 2026-12 they were joined through junctions with 0.2 m "
+        "free stubs because towenv's series (aft-tow-point) coupling diverges for this system (simulator problems).",
     ]
     for c in claims:
         if not c["holds"]:
@@ -200,7 +199,7 @@ def run(ctx: CaseContext) -> dict:
               "array-front depth change after the manoeuvre start (s); smallest segment tension (N)",
               ["manoeuvre", "current", "front depth t=0", "front depth end", "array-end depth t=0",
                "array-end depth end", "tail-end depth end", "T t=0", "T end", "T max", "T min", "t90 front (s)",
-               "min segment T (N)"], rows, f"Array front = the junction 723 m down the tow cable; run length "
+               "min segment T (N)"], rows, f"Array front = the splice 723 m down the tow cable; run length "
                                            f"{dur:.0f} s; manoeuvre from t = {T0:.0f} s, ramp {RAMP:.0f} s per leg."),
         Table("Galilean check: steady tow at 4 m/s in a 0.5 m/s current vs a steady tow at the relative speed",
               ["case", "equivalent", "front depth (m)", "equivalent front depth (m)", "T (kN)", "equivalent T (kN)"],
@@ -230,7 +229,7 @@ def run(ctx: CaseContext) -> dict:
             "sea water 1025 kg/m³; normal added mass ρA (the paper's m₁ = m + ρA), no tangential added mass.",
             "The paper's tangential drag term is ½ρ d π C_t U_t|U_t|, so towenv's ct (on d) = π C_t.",
             "~20 m segments (36 + 14 + 3) and Δt = 0.1 s; the paper's grid is not printed.",
-            "Sections joined by junctions with 0.2 m free stubs (one towenv line has one set of properties).",
+            "Sections spliced end to end (`top = {splice = ...}`: one towenv line has one set of properties).",
         ],
         "tables": [t.to_dict() for t in tables], "figures": [f.to_dict() for f in figs],
         "findings": findings, "disagreements": disagreements, "claims": claims, "values": values,

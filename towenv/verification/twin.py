@@ -282,7 +282,7 @@ def body_params(sys, b):
                 r_G=v3(L.BP_CG), r_B=v3(L.BP_CB), I_G=v3(L.BP_INERTIA), rot_lin=v3(L.BP_ROT_DAMPING),
                 rot_quad=v3(L.BP_QUAD_ROT_DAMPING), lift_slope=p[L.BP_LIFT_SLOPE], added_mass=v3(L.BP_ADDED_MASS),
                 added_inertia=v3(L.BP_ADDED_INERTIA), r_aft=v3(L.BP_AFT_TOW_POINT), M_A=M_A,
-                coriolis=bool(p[L.BP_ADDED_CORIOLIS] != 0.0))
+                coriolis=bool(p[L.BP_ADDED_CORIOLIS] != 0.0), external=p[L.BP_EXTERNAL_FORCE:L.BP_EXTERNAL_FORCE + 3].copy())
 
 
 def _coefficients_np(theta, inc, cd, cl, cm):
@@ -296,7 +296,8 @@ def _coefficients_np(theta, inc, cd, cl, cm):
 def body_loads_np(sys, b, lam, vbody, omega, cur_global):
     """Body-axis force (at the tow point) and moment (about the tow point) on rigid body ``b`` (model.md 3.3).
 
-    * weight m g_b at r_G and buoyancy −ρV g_b at r_B, g_b = Λ (0, 0, −g);
+    * weight m g_b at r_G and buoyancy −ρV g_b at r_B, g_b = Λ (0, 0, −g); a constant external force (global axes)
+      at r_G (``external_force``, thrusters);
     * hydrodynamics from the relative velocity of the centroid v_r = v + ω×r_B − Λ V_c, |v_r| = V:
       incidences θ_v = atan2(w_r, u_r) and θ_h = atan2(v_r, u_r) (docs/scene-format.md); drag
       ½ρAV² (C_d,v(θ_v) + C_d,h(θ_h) − C_d,v(0))⁺ along −v_r; lift ½ρAV² C_L(θ_v) ⊥ v_r in x′z′ toward +z′;
@@ -314,6 +315,9 @@ def body_loads_np(sys, b, lam, vbody, omega, cur_global):
     g_b = lam @ np.array([0.0, 0.0, -g])
     f = (P["mass"] - rho * P["volume"]) * g_b
     m = np.cross(P["r_G"], P["mass"] * g_b) + np.cross(P["r_B"], -rho * P["volume"] * g_b)
+    f_ext = lam @ P["external"]                      # thrusters: a global force at the centre of gravity
+    f = f + f_ext
+    m = m + np.cross(P["r_G"], f_ext)
 
     v_r = np.asarray(vbody, float) + np.cross(omega, P["r_B"]) - lam @ np.asarray(cur_global, float)
     V = float(np.linalg.norm(v_r))
