@@ -55,12 +55,15 @@ def main(argv=None):
 
     lines = ["# Hover et al. deep tow: sensitivity of the towfish heave response to the two readings", "",
              "Command: `python scripts/hover_readings.py" + (" --quick" if a.quick else "") + "`. Q = |fish heave| / "
-             "|top heave| (harmonic analysis of the last four periods); linear = towenv.linear at that amplitude.", "",
-             "| reading | w0 (N/m) | amplitude (m) | time-domain peak: ω (rad/s), Q | linear peak: ω, Q | fish-end slack at ω |",
-             "|---|---|---|---|---|---|"]
+             "|top heave| (harmonic analysis of the last four periods); linear = towenv.linear at that amplitude; "
+             "Hover = the paper's appendix model with its equal-dissipation drag linearisation.", "",
+             "| reading | w0 (N/m) | amplitude (m) | time-domain peak: ω (rad/s), Q | linear peak: ω, Q | Hover peak: ω, Q "
+             "| fish-end slack at ω |",
+             "|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['reading']} | {r['w0']:.2f} | {r['amplitude']:.1f} | {r['time_domain_peak']['omega']:.2f}, "
                      f"{r['time_domain_peak']['Q']:.3f} | {r['linear_peak']['omega']:.2f}, {r['linear_peak']['Q']:.3f} | "
+                     f"{r['closed_form_peak']['omega']:.2f}, {r['closed_form_peak']['Q']:.3f} | "
                      f"{', '.join(f'{w:g}' for w in r['slack_at']) or 'none'} |")
     lines += ["", "Time-domain Q per frequency:", "",
               "| ω (rad/s) | " + " | ".join(r["reading"] for r in rows) + " |",

@@ -18,3 +18,17 @@ def test_amplitude_reading_decides_the_resonance_and_w0_barely_matters():
     assert q["aw"] == pytest.approx(q["a"], rel=0.05) and q["hw"] == pytest.approx(q["h"], rel=0.05)
     # the linearised model at the amplitude shows the same ordering
     assert height1["linear"]["Q"][0] > 1.10 * amp1["linear"]["Q"][0]
+    # and so does the paper's own linearisation (appendix model, equal-dissipation towfish drag at the amplitude)
+    assert height1["closed_form_peak"]["Q"] > 1.10 * amp1["closed_form_peak"]["Q"]
+
+
+def test_paper_drag_linearisation_matches_equal_dissipation():
+    """The appendix closed form's towfish damping B_Q is Hover's equal-dissipation value (8/3π) ρ/2 C_d A_Q ω |p1|
+    at the computed amplitude (the fixed point brentq finds), to 1e-9."""
+    import math
+    from towenv.verification import closed_forms as cf
+    for om, amp in ((0.5, 1.0), (0.9, 0.5)):
+        tf = H._closed_form(om, amp)
+        B = 8 / (3 * math.pi) * H.QDRAG * om * amp * abs(tf.p1)
+        again = cf.axial_string_tf(om, H.L, H.M_CAB, H.EA, H.M_FISH + H.MA_Q, B_Q=B, b_p=H._bp(om, amp))
+        assert abs(again.p1) == pytest.approx(abs(tf.p1), rel=1e-9)
