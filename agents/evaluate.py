@@ -1,7 +1,8 @@
 """Evaluate a policy and every baseline on the evaluation sea states; write a report.
 
 POLICY is a policy zip written by scripts/train.py (algorithm and environment from its metadata), an ARS
-policy .npz written by scripts/train_ars.py, any SB3 zip (give --algo and --env), or a baseline name (then
+policy .npz written by scripts/train_ars.py or scripts/train_ars_compensator.py (told apart by the env_id and
+algo of its metadata), any SB3 zip (give --algo and --env), or a baseline name (then
 --env is needed). Every controller runs the
 same episodes: ``env.unwrapped.eval_sea_states()`` (12 = WMO codes 3-5 × 4 headings), optionally with
 extra wave seeds per entry (--replicates). Writes ``<out-dir>/<name>/report.md``, ``summary.png``,
@@ -177,6 +178,35 @@ def seed_set_sentence(seed_set: str, replicates: int) -> str:
             f"`--seed-set final` for final numbers).")
 
 
+# ------------------------------------------------------------------------------------------ policy files
+#: ARS policy files (.npz) by the ``env_id`` and ``algo`` of their metadata: the module that loads them
+NPZ_LOADERS = {("towenv/WinchPayout-v0", "ars"): ("agents.ars", "load_ars_policy"),
+               ("towenv/CompensatorGains-v0", "ars_skyhook"): ("agents.ars_compensator", "load_policy")}
+
+
+def load_policy_file(path, algo: str | None = None):
+    """A policy from a file: an .npz is an ARS policy, loaded by the module its metadata's (env_id, algo) names
+    (:data:`NPZ_LOADERS`; ValueError for an .npz that is none of them); anything else goes to
+    :func:`agents.zoo.load_policy` (SB3 zip)."""
+    import importlib
+    import json
+
+    import numpy as np
+    path = Path(path)
+    if path.suffix != ".npz":
+        from agents.zoo import load_policy
+        return load_policy(path, algo=algo)
+    with np.load(path, allow_pickle=False) as z:
+        meta = json.loads(str(z["meta"])) if "meta" in z else {}
+    key = (meta.get("env_id"), meta.get("algo")) if isinstance(meta, dict) else (None, None)
+    if key not in NPZ_LOADERS:
+        known = "; ".join(f"env_id {e!r} + algo {a!r}" for e, a in NPZ_LOADERS)
+        raise ValueError(f"unknown policy file: {path.name} has env_id {key[0]!r}, algo {key[1]!r} in its "
+                         f"metadata (known .npz policies: {known})")
+    mod, fn = NPZ_LOADERS[key]
+    return getattr(importlib.import_module(mod), fn)(path)
+
+
 # ------------------------------------------------------------------------------------------ main
 def main(argv=None):
     args = parse_args(argv)
@@ -189,7 +219,7 @@ def main(argv=None):
     from agents.common import env_kind
     from agents.evaluation import _PHYSICS_KEYS, make_eval_env, run_evaluation
     from agents.report import MIN_VERDICT_EPISODES, format_goal_value, verdict, write_report
-    from agents.zoo import load_policy, parse_env_kwargs
+    from agents.zoo import parse_env_kwargs
 
     trained = []
     env_id = args.env
@@ -205,12 +235,8 @@ def main(argv=None):
         if not path.is_file():
             _fail(f"{spec!r} is neither a file nor a baseline name ({', '.join(BASELINES)})")
         try:
-            if path.suffix == ".npz":          # an ARS policy (agents/ars.py)
-                from agents.ars import load_ars_policy
-                pol = load_ars_policy(path)
-            else:
-                pol = load_policy(path, algo=args.algo)
-        except Exception as e:      # not a zip, unknown algorithm, ...
+            pol = load_policy_file(path, algo=args.algo)
+        except Exception as e:      # not a zip, unknown algorithm, unknown .npz, ...
             _fail(f"{spec}: cannot load the policy ({type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''})")
         meta = pol.meta
         eid = meta.get("env_id") or env_id

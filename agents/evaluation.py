@@ -130,6 +130,9 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
         if meta.get("algo") == "ars":
             desc += (", linear residual on `along_cable` over the MRU along-cable history "
                      f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
+        elif meta.get("algo") == "ars_skyhook":
+            desc = ("ARS policy, linear residual on `skyhook` over the tow-point heave history and stroke features "
+                    f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
         for w in meta.get("env_wrapper") or []:
             if isinstance(w, dict):
                 for wn, wkw in w.items():

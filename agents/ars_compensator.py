@@ -1,0 +1,501 @@
+"""Augmented Random Search (ARS) on a linear residual over the skyhook law, for ``towenv/CompensatorGains-v0``.
+
+The pattern of :mod:`agents.ars` (WinchPayout) applied to the semi-active compensator (issue 14): PPO residuals on
+skyhook reached 14–22 % less significant heave than ``best_passive`` but with 77–85 end-stop hits in 24
+episodes (docs/agents.md). Here the residual sees a few seconds of the tow point's vertical motion, the stroke
+and nonlinear stroke features that let it stiffen or damp near the end stops, and it is trained by random
+search in parameter space (Mania et al. 2018, ARS V1-t: fixed feature scales, the best b of N directions, step
+normalised by the rewards' standard deviation) with an explicit end-stop penalty in the cost. The policy::
+
+    a = clip(a_skyhook(obs) + Θ_c · φ(history), −1, 1)           a = (log-stiffness, log-damping) action
+
+* ``a_skyhook`` — the skyhook semi-active law (``agents/classical.py``) with its tuned per-sea-state gains (the
+  table is copied into the policy file, so retuning ``baselines.yml`` later does not change a trained policy);
+* ``φ`` — :data:`HISTORY_CHANNELS` (MRU tow-point vertical velocity, acceleration, heave displacement) at the
+  lags :data:`LAG_STEPS` (0, 0.2, …, 2.0 s); :data:`INSTANT_CHANNELS` (stroke, stroke velocity, fish heave about
+  its running mean and its rate, fish pitch about its running mean and its rate); :data:`NONLINEAR` stroke
+  features (|s|, s², s⁴, s·ṡ, max(s·ṡ, 0); s = stroke / half stroke, ṡ = stroke velocity / half stroke) and
+  a constant, each divided by a fixed scale (:data:`FEATURE_SCALES`). The stroke features are *even* in s
+  (or signed by the direction of travel relative to the nearer stop) because the action is a gain, not a
+  force: a stiffness that grows near *both* stops is a function of |s|, not of s|s| or s³;
+* ``Θ_c`` — a (2 × n_features) matrix per sea state of the skyhook gain table (the same schedule as the base).
+
+Θ = 0 is the skyhook law exactly. The policy is causal: it acts on the observation vector and its own memory of
+earlier observations, plus the sea-state estimate at episode start (as the base does).
+
+Training (:func:`train`, ``python scripts/train_ars_compensator.py``) evaluates all perturbations of an
+iteration as one batch of :class:`towenv.envs.vector.CompensatorGainsVectorEnv`, with common random numbers:
+the + and − perturbation of a direction run the same sea states and wave seeds, and the skyhook law runs them
+too. Cost of an episode::
+
+    ln(σ_h / σ_h,skyhook) + w_p · ln(σ_θ / σ_θ,skyhook) + w_hit · (end-stop hits in the episode)
+
+(σ over t ≥ 60 s, hits over the whole episode; the winch pattern's cost plus the hit term). Wave seeds are
+fresh every iteration: ``1000·code + j + 50000 + 100·iteration + 100000·seed`` (iteration < 100) — never an
+evaluation (+0…400), tuning (+500), validation (+700), Hover design (+900), final (+20000…), clairvoyant-teacher
+(+30000…) or WinchPayout-ARS (+40000 + 100·iteration, iteration < 100) seed.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .common import COMPENSATOR_ID, ObsReader, nearest_key
+
+__all__ = ["ARSCompensatorPolicy", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
+           "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
+           "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "main"]
+
+ENV_ID = COMPENSATOR_ID
+#: ``meta["algo"]`` of the policy files (scripts/evaluate.py dispatches on env_id + algo)
+ALGO = "ars_skyhook"
+#: channels whose recent history the policy sees, and the lags (control steps of 0.1 s): 0, 0.2, …, 2.0 s
+HISTORY_CHANNELS = ("tow_vel_z", "tow_acc_z", "tow_heave")
+LAG_STEPS = tuple(range(0, 21, 2))
+#: channels the policy sees at the current step only
+INSTANT_CHANNELS = ("comp_stroke", "comp_stroke_vel", "fish_heave_dev", "fish_heave_rate", "fish_pitch_dev",
+                    "fish_pitch_rate")
+#: nonlinear stroke features (s = stroke / half stroke, v = stroke velocity / half stroke, in 1/s)
+NONLINEAR = ("stroke_abs", "stroke_sq", "stroke_4", "stroke_out", "stroke_out_pos")
+#: fixed feature scales: each feature's standard deviation under the skyhook law on the 12 training-seed episodes
+#: of iteration 0, training seed 0 (180 s; :func:`measure_scales`; measured once and kept fixed so that the
+#: policy is a fixed function of its inputs)
+FEATURE_SCALES = {"tow_vel_z": 1.333, "tow_acc_z": 2.43, "tow_heave": 0.821, "comp_stroke": 0.2596,
+                  "comp_stroke_vel": 0.5161, "fish_heave_dev": 0.2817, "fish_heave_rate": 0.2249,
+                  "fish_pitch_dev": 0.1161, "fish_pitch_rate": 0.2979, "stroke_abs": 0.1687, "stroke_sq": 0.1059,
+                  "stroke_4": 0.05032, "stroke_out": 0.1397, "stroke_out_pos": 0.0905}
+#: wave seeds of training: base seed (1000·code + j) + 50000 + 100·iteration + 100000·training seed
+TRAIN_SEED_OFFSET = 50000
+#: iterations per run: 100·iteration stays below 10000, so the training seeds of one run stay in
+#: [+50000, +59900] and never reach another run's (+100000·seed) or WinchPayout ARS's (+40000 … +49900) seeds
+MAX_ITERATIONS = 100
+N_HISTORY = max(LAG_STEPS) + 1
+GAIN_KEYS = ("c_sky", "b0", "k0", "margin", "k_stop")
+N_ACT = 2
+
+
+def feature_names() -> list[str]:
+    return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
+            + list(NONLINEAR) + ["const"])
+
+
+N_FEATURES = len(feature_names())
+
+
+def _train_seed(base_seed: int, iteration: int, seed: int) -> int:
+    if not 0 <= int(iteration) < MAX_ITERATIONS:
+        raise ValueError(f"training iteration {iteration} outside 0..{MAX_ITERATIONS - 1} (seed-set disjointness)")
+    return int(base_seed) + TRAIN_SEED_OFFSET + 100 * int(iteration) + 100000 * int(seed)
+
+
+# ============================================================================ features (batch; one env = batch of 1)
+class _Features:
+    """φ for a batch of observations ``(n, obs_size)`` with the history ring of every row. The single-environment
+    policy uses it with n = 1, so training and deployment share one arithmetic."""
+
+    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict):
+        self.reader = reader
+        self.half = float(half_stroke)
+        self.scales = dict(scales)
+        self.hist = None
+
+    def __call__(self, obs, first: bool):
+        r, sc = self.reader, self.scales
+        n = obs.shape[0]
+        h = np.stack([r.batch(obs, c) / sc[c] for c in HISTORY_CHANNELS], axis=1)
+        if first or self.hist is None:
+            self.hist = np.repeat(h[:, :, None], N_HISTORY, axis=2)
+        else:
+            self.hist = np.roll(self.hist, 1, axis=2)
+            self.hist[:, :, 0] = h
+        lagged = self.hist[:, :, list(LAG_STEPS)].reshape(n, -1)
+        inst = [r.batch(obs, c) / sc[c] for c in INSTANT_CHANNELS]
+        s = r.batch(obs, "comp_stroke")                     # fraction of the half stroke
+        v = r.batch(obs, "comp_stroke_vel") / self.half     # half strokes per second
+        a = np.abs(s)
+        s2 = s * s
+        out = s * v
+        nl = {"stroke_abs": a, "stroke_sq": s2, "stroke_4": s2 * s2, "stroke_out": out,
+              "stroke_out_pos": np.maximum(out, 0.0)}
+        cols = inst + [nl[k] / sc[k] for k in NONLINEAR] + [np.ones(n)]
+        return np.concatenate([lagged, np.stack(cols, axis=1)], axis=1)
+
+
+def _residual(theta, phi):
+    """Θ·φ per row: theta (n, 2, F), phi (n, F) -> (n, 2) (one arithmetic for the batch and the single env)."""
+    return (theta * phi[:, None, :]).sum(axis=2)
+
+
+# ============================================================================ the policy (one environment)
+class ARSCompensatorPolicy:
+    """A trained linear residual over skyhook (module docstring) with SB3's ``predict``. Bind it to the
+    environment it acts in with :meth:`bind_env` (``scripts/evaluate.py`` does); pass ``episode_start=True`` on
+    the first step of every episode (it reads the sea-state estimate then and clears its memory)."""
+    acts_on = "observations (and their history) + sea state"
+
+    def __init__(self, theta: dict, base_table: dict, scales: dict | None = None, meta: dict | None = None,
+                 name: str = "ars_compensator"):
+        self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
+        bad = [k for k, v in self.theta.items() if v.shape != (N_ACT, N_FEATURES)]
+        if bad:
+            raise ValueError(f"ARSCompensatorPolicy: theta entries {bad} are not ({N_ACT}, {N_FEATURES})")
+        self.base_table = dict(base_table)
+        self.scales = dict(FEATURE_SCALES | (scales or {}))
+        self.meta = dict(meta or {})
+        self.meta.setdefault("algo", ALGO)
+        self.meta.setdefault("env_id", ENV_ID)
+        self.meta.setdefault("env_kwargs", {})
+        self.name = name
+        self.env = None
+        self._th = None
+        self._feat = None
+
+    def bind_env(self, env):
+        from .classical import SkyhookCompensator
+        self.env = env
+        self.base = SkyhookCompensator(env, table=self.base_table)
+        self.reader = self.base.reader
+        self.u = env.unwrapped
+        self._feat = _Features(self.reader, self.u._half_stroke, self.scales)
+        self._th = None
+        return self
+
+    def reset(self, env=None):
+        if env is not None:
+            self.bind_env(env)
+        self._th = None
+
+    def predict(self, obs, state=None, episode_start=None, deterministic: bool = True):
+        if self.env is None:
+            raise RuntimeError("ARSCompensatorPolicy: call bind_env(env) before predict()")
+        o = np.asarray(obs, dtype=float)
+        if o.ndim == 2:
+            o = o[0]
+        start = episode_start is not None and bool(np.any(episode_start))
+        first = start or self._th is None
+        if first:
+            self.base.reset()
+            self._th = self.theta[nearest_key(self.theta, self.u.sea[0])][None]
+        a_base = np.asarray(self.base.act(o), float)
+        phi = self._feat(np.asarray(obs, np.float32).reshape(1, -1), first)
+        a = np.clip(a_base + _residual(self._th, phi)[0], -1.0, 1.0)
+        out = a.astype(np.float32)
+        return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
+
+
+# ============================================================================ batched rollouts (training)
+def _to_action(g, lo, hi):
+    """``CompensatorGainsEnv._to_action`` element-wise, with ``math.log`` (the single env's arithmetic)."""
+    if hi <= lo:
+        return np.full(len(g), -1.0)
+    den = math.log(hi / lo)
+    x = np.array([2.0 * math.log(gi / lo) / den - 1.0 if gi > 0 else -1.0 for gi in g])
+    return np.clip(x, -1.0, 1.0)
+
+
+class _Batch:
+    """The skyhook law (``classical.SkyhookCompensator.gains`` + ``env.action_of``, element-wise) and the
+    features for a batch of observations."""
+
+    def __init__(self, venv, base_table: dict, scales: dict):
+        e0 = venv.envs[0]
+        self.reader = ObsReader(e0)
+        self.kmap, self.bmap = e0.stiffness_range, e0.damping_range
+        self.table = base_table
+        self.features = _Features(self.reader, e0._half_stroke, scales)
+
+    def set_seas(self, seas):
+        from .classical import DEFAULT_SKYHOOK_GAINS
+        self.G = np.array([[float((DEFAULT_SKYHOOK_GAINS | self.table[nearest_key(self.table, s)])[k])
+                            for k in GAIN_KEYS] for s in seas])
+
+    def base_action(self, obs):
+        r, G = self.reader, self.G
+        k_lo, k_hi = self.kmap[0], self.kmap[1]
+        b_lo, b_hi = self.bmap[0], self.bmap[1]
+        s = r.batch(obs, "comp_stroke")
+        sd = r.batch(obs, "comp_stroke_vel")
+        z_abs = r.batch(obs, "tow_vel_z") + sd
+        b0 = np.minimum(np.maximum(G[:, 1], b_lo), b_hi)
+        on = (z_abs * sd > 0.0) & (np.abs(sd) > 1e-6)
+        sky = np.minimum(np.maximum(G[:, 0] * z_abs / np.where(on, sd, 1.0), b0), b_hi)
+        b = np.where(on, sky, b0)
+        m = np.minimum(np.maximum(G[:, 3], 1e-3), 1.0)
+        x = (np.abs(s) - (1.0 - m)) / m
+        k0 = np.minimum(np.maximum(G[:, 2], k_lo), k_hi)
+        k = k0 + np.maximum(G[:, 4] - k0, 0.0) * np.minimum(np.maximum(x, 0.0), 1.0)
+        k = np.minimum(np.maximum(k, k_lo), k_hi)
+        return np.stack([_to_action(k, self.kmap[0], self.kmap[1]), _to_action(b, self.bmap[0], self.bmap[1])],
+                        axis=1)
+
+
+def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0, record_actions: bool = False):
+    """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i], (2, F)); returns
+    σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard and the end-stop hits of the whole episode, per copy
+    (σ NaN for a copy that ended early), and with ``record_actions`` the actions (T, n, 2) as stepped."""
+    n = venv.num_envs
+    seeds = [int(s) for s in seeds]
+    theta = np.asarray(theta, float)
+    obs = None
+    for i in range(n):
+        mask = np.zeros(n, bool)
+        mask[i] = True
+        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    batch.set_seas(seas)
+    T = venv.envs[0].max_steps
+    H = np.zeros((T, n))
+    P = np.zeros((T, n))
+    t = np.zeros(T)
+    hits = np.zeros(n)
+    ended = np.zeros(n, bool)
+    acts = np.zeros((T, n, N_ACT), np.float32) if record_actions else None
+    for k in range(T):
+        phi = batch.features(obs, k == 0)
+        a = np.clip(batch.base_action(obs) + _residual(theta, phi), -1.0, 1.0).astype(np.float32)
+        if record_actions:
+            acts[k] = a
+        obs, _r, term, trunc, infos = venv.step(a)
+        H[k] = infos["fish_heave"]
+        P[k] = infos["fish_pitch"]
+        t[k] = infos["t"][0]
+        hits += np.where(ended, 0, infos["end_stop_hits"])
+        if k < T - 1:
+            ended |= term | trunc
+    w = t >= discard
+    sh = H[w].std(axis=0)
+    sp = np.degrees(P[w].std(axis=0))
+    sh[ended] = np.nan
+    sp[ended] = np.nan
+    return (sh, sp, hits, acts) if record_actions else (sh, sp, hits)
+
+
+def _setup(episode_seconds: float, n_copies: int, scales: dict):
+    import gymnasium as gym
+    __import__("towenv")                    # registers the ids
+    from towenv.envs.vector import CompensatorGainsVectorEnv
+    from .baselines import load_tuned
+    table = dict(load_tuned().get("skyhook") or {})
+    if not table:
+        raise RuntimeError("no tuned skyhook table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
+    env = gym.make(ENV_ID)
+    ev = env.unwrapped.eval_sea_states()
+    env.close()
+    venv = CompensatorGainsVectorEnv(num_envs=n_copies, autoreset_mode="NextStep", batch_infos=True,
+                                     episode_seconds=float(episode_seconds))
+    return table, ev, venv, _Batch(venv, table, scales)
+
+
+def measure_scales(seed: int = 0, episode_seconds: float = 180.0) -> dict:
+    """The standard deviation of every feature (before scaling) under the skyhook law on the 12 training-seed
+    episodes of iteration 0 of training seed ``seed``, pooled over all steps (how :data:`FEATURE_SCALES` was
+    measured)."""
+    unit = {k: 1.0 for k in FEATURE_SCALES}
+    probe = _setup(episode_seconds, 12, unit)
+    table, ev, venv, batch = probe
+    seas = [s for s, _ in ev]
+    seeds = [_train_seed(b, 0, seed) for _, b in ev]
+    n = venv.num_envs
+    obs = None
+    for i in range(n):
+        mask = np.zeros(n, bool)
+        mask[i] = True
+        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    batch.set_seas(seas)
+    rows = []
+    for k in range(venv.envs[0].max_steps):
+        phi = batch.features(obs, k == 0)
+        rows.append(phi)
+        obs, *_ = venv.step(batch.base_action(obs).astype(np.float32))
+    venv.close()
+    X = np.concatenate(rows, axis=0)
+    names = feature_names()
+    out = {}
+    for c in HISTORY_CHANNELS:
+        out[c] = float(X[:, names.index(f"{c}@-0.0s")].std())
+    for c in list(INSTANT_CHANNELS) + list(NONLINEAR):
+        out[c] = float(X[:, names.index(c)].std())
+    return {k: float(f"{v:.4g}") for k, v in out.items()}
+
+
+# ============================================================================ training
+def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERATIONS, directions: int = 8,
+          top: int = 4, nu: float = 0.01, alpha: float = 0.01, pitch_weight: float = 0.5, hit_weight: float = 0.05,
+          episode_seconds: float = 180.0, fail_penalty: float = 1.0, progress: bool = True,
+          log=print) -> ARSCompensatorPolicy:
+    """ARS V1-t (module docstring) on the 12 evaluation (Hs, Tp, heading) entries with training wave seeds; one
+    search per sea state of the skyhook table, sharing one batched rollout per iteration. Cost of an episode:
+    ln(σ_h/σ_h,sky) + pitch_weight · ln(σ_θ/σ_θ,sky) + hit_weight · hits on the same waves. Stops after
+    ``max_iterations`` (≤ :data:`MAX_ITERATIONS`) or when the next iteration would pass ``minutes`` of wall time."""
+    if not 1 <= int(max_iterations) <= MAX_ITERATIONS:
+        raise ValueError(f"max_iterations must be in 1..{MAX_ITERATIONS} (training seeds stay disjoint)")
+    t_start = time.perf_counter()
+    import gymnasium as gym
+    __import__("towenv")
+    from .baselines import load_tuned
+    table = dict(load_tuned().get("skyhook") or {})
+    env = gym.make(ENV_ID)
+    ev0 = env.unwrapped.eval_sea_states()
+    env.close()
+    keys0 = sorted(table)
+    ent = {k: [i for i, (sea, _s) in enumerate(ev0) if nearest_key(table, sea) == k] for k in keys0}
+    keys = [k for k in keys0 if ent[k]]
+    C, K = len(keys), int(directions)
+    n_pert = sum(2 * K * len(ent[k]) for k in keys)
+    n_ref = len(ev0)
+    n_copies = n_pert + 2 * n_ref
+    table, ev, venv, batch = _setup(episode_seconds, n_copies, dict(FEATURE_SCALES))
+    rng = np.random.default_rng(int(seed))
+    theta = np.zeros((C, N_ACT, N_FEATURES))
+    curve = []
+    log(f"[ars_comp] seed {seed}: {C} sea states x {K} directions x 2 signs + 2 x {n_ref} reference episodes = "
+        f"{n_copies} copies of {episode_seconds:g} s per iteration; nu={nu} alpha={alpha} top={top} "
+        f"pitch_weight={pitch_weight} hit_weight={hit_weight}; {N_ACT} x {N_FEATURES} weights per sea state")
+    it = 0
+    last = 0.0
+    while it < max_iterations:
+        elapsed = time.perf_counter() - t_start
+        if elapsed + last > 60.0 * minutes:
+            break
+        t0 = time.perf_counter()
+        delta = rng.standard_normal((C, K, N_ACT, N_FEATURES))
+        seas, seeds, th, owner = [], [], [], []
+        for ci, k in enumerate(keys):
+            for d in range(K):
+                for sign in (1.0, -1.0):
+                    for e in ent[k]:
+                        seas.append(ev[e][0])
+                        seeds.append(_train_seed(ev[e][1], it, seed))
+                        th.append(theta[ci] + sign * nu * delta[ci, d])
+                        owner.append(e)
+        for which in ("theta", "skyhook"):
+            for e, (sea, s) in enumerate(ev):
+                ci = keys.index(nearest_key(table, sea))
+                seas.append(sea)
+                seeds.append(_train_seed(s, it, seed))
+                th.append(theta[ci] if which == "theta" else np.zeros((N_ACT, N_FEATURES)))
+        sh, sp, hits = rollout_batch(venv, batch, seas, seeds, np.array(th))
+        cur_h, base_h = sh[n_pert:n_pert + n_ref], sh[n_pert + n_ref:]
+        cur_p, base_p = sp[n_pert:n_pert + n_ref], sp[n_pert + n_ref:]
+        cur_hits, base_hits = hits[n_pert:n_pert + n_ref], hits[n_pert + n_ref:]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cost = np.where(np.isfinite(sh[:n_pert]),
+                            np.log(sh[:n_pert] / base_h[owner]) + pitch_weight * np.log(sp[:n_pert] / base_p[owner])
+                            + hit_weight * hits[:n_pert], fail_penalty + hit_weight * hits[:n_pert])
+        j = 0
+        steps = []
+        for ci, k in enumerate(keys):
+            ne = len(ent[k])
+            R = -cost[j:j + 2 * K * ne].reshape(K, 2, ne).mean(axis=2)
+            j += 2 * K * ne
+            rp, rm = R[:, 0], R[:, 1]
+            order = np.argsort(-np.maximum(rp, rm))[:top]
+            sd = float(np.concatenate([rp[order], rm[order]]).std())
+            sd = sd if sd > 1e-12 else 1.0
+            step = alpha / (top * sd) * np.einsum("d,dcf->cf", rp[order] - rm[order], delta[ci, order])
+            theta[ci] += step
+            steps.append(float(np.linalg.norm(step)))
+        pooled_h = float(np.nanmean(cur_h) / np.nanmean(base_h))
+        pooled_p = float(np.nanmean(cur_p) / np.nanmean(base_p))
+        last = time.perf_counter() - t0
+        curve.append({"iteration": it, "heave_ratio": pooled_h, "pitch_ratio": pooled_p, "hits": float(cur_hits.sum()),
+                      "hits_skyhook": float(base_hits.sum()), "hits_perturbed_mean": float(hits[:n_pert].mean()),
+                      "cost": float(np.nanmean(np.log(cur_h / base_h) + pitch_weight * np.log(cur_p / base_p)
+                                               + hit_weight * cur_hits)),
+                      "seconds": last, "failures": int(np.sum(~np.isfinite(sh)))})
+        if progress:
+            log(f"[ars_comp] it {it:3d} ({last:5.1f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): policy "
+                f"before this step vs skyhook on {n_ref} fresh training episodes: heave {100 * (pooled_h - 1):+6.2f} %, "
+                f"pitch {100 * (pooled_p - 1):+5.1f} %, hits {int(cur_hits.sum())} (skyhook {int(base_hits.sum())}; "
+                f"perturbed mean {hits[:n_pert].mean():.2f}/episode); |step| {', '.join(f'{s:.4f}' for s in steps)}")
+        it += 1
+    steps_per_episode = int(venv.envs[0].max_steps)
+    venv.close()
+    wall = time.perf_counter() - t_start
+    meta = {"algo": ALGO, "env_id": ENV_ID, "env_kwargs": {}, "seed": int(seed), "iterations": it,
+            "num_timesteps": it * n_copies * steps_per_episode, "wall_seconds": wall,
+            "hyperparameters": {"directions": K, "top": top, "nu": nu, "alpha": alpha, "pitch_weight": pitch_weight,
+                                "hit_weight": hit_weight, "episode_seconds": episode_seconds, "minutes": minutes,
+                                "max_iterations": max_iterations, "fail_penalty": fail_penalty},
+            "train_seeds": f"1000*code + j + {TRAIN_SEED_OFFSET} + 100*iteration + 100000*{int(seed)}",
+            "curve": curve}
+    return ARSCompensatorPolicy({k: theta[ci] for ci, k in enumerate(keys)}, table, FEATURE_SCALES, meta,
+                                name=f"ars_compensator_s{seed}")
+
+
+# ============================================================================ files
+def save_policy(policy: ARSCompensatorPolicy, path: str | Path) -> Path:
+    """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON with
+    ``env_id`` and ``algo``), atomically."""
+    from towenv.atomic import atomic_savez
+    path = Path(path)
+    keys = sorted(policy.theta)
+    meta = dict(policy.meta) | {"features": feature_names(), "lag_steps": list(LAG_STEPS),
+                                "history_channels": list(HISTORY_CHANNELS), "instant_channels": list(INSTANT_CHANNELS),
+                                "nonlinear": list(NONLINEAR)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_savez(path, {"theta": np.array([policy.theta[k] for k in keys]), "keys": np.array(keys),
+                        "base_table": np.array(json.dumps(policy.base_table)),
+                        "scales": np.array(json.dumps(policy.scales)), "meta": np.array(json.dumps(meta))})
+    return path
+
+
+def load_policy(path: str | Path) -> ARSCompensatorPolicy:
+    """Read a policy written by :func:`save_policy` (bind it to an environment before use)."""
+    path = Path(path)
+    with np.load(path, allow_pickle=False) as z:
+        if "theta" not in z or "keys" not in z or "meta" not in z:
+            raise ValueError(f"{path}: not an ARS policy file (no theta/keys/meta)")
+        meta = json.loads(str(z["meta"]))
+        if meta.get("env_id") != ENV_ID or meta.get("algo") != ALGO:
+            raise ValueError(f"{path}: not an ARS skyhook-residual policy (env_id {meta.get('env_id')!r}, algo "
+                             f"{meta.get('algo')!r})")
+        if meta.get("features") != feature_names():
+            raise ValueError(f"{path}: its features differ from this version's ({len(meta.get('features', []))} "
+                             f"against {N_FEATURES})")
+        theta = {str(k): np.array(v) for k, v in zip(z["keys"], z["theta"])}
+        return ARSCompensatorPolicy(theta, json.loads(str(z["base_table"])), json.loads(str(z["scales"])), meta,
+                                    name=path.stem)
+
+
+def main(argv=None) -> int:
+    """``python scripts/train_ars_compensator.py --seed 0 --minutes 30 --export runs/ars_CompensatorGains-v0_s0.npz``"""
+    import argparse
+    ap = argparse.ArgumentParser(description="Train an ARS linear residual over the skyhook law "
+                                             "(towenv/CompensatorGains-v0); agents/ars_compensator.py explains it.")
+    ap.add_argument("--seed", type=int, default=0, help="training seed: ARS directions and training wave seeds")
+    ap.add_argument("--minutes", type=float, default=30.0, help="wall-clock budget (default 30)")
+    ap.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS, help=f"at most {MAX_ITERATIONS}")
+    ap.add_argument("--directions", type=int, default=8)
+    ap.add_argument("--top", type=int, default=4)
+    ap.add_argument("--nu", type=float, default=0.01, help="exploration noise in parameter space")
+    ap.add_argument("--alpha", type=float, default=0.01, help="step size")
+    ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
+    ap.add_argument("--hit-weight", type=float, default=0.05, help="cost of one end-stop hit (in ln σ units)")
+    ap.add_argument("--episode-seconds", type=float, default=180.0)
+    ap.add_argument("--measure-scales", action="store_true", help="print the feature scales (skyhook, training "
+                                                                  "seeds of iteration 0) and exit")
+    ap.add_argument("--export", default=None, help="policy file (default runs/ars_CompensatorGains-v0_s<seed>.npz)")
+    a = ap.parse_args(argv)
+    for name in ("minutes", "nu", "alpha", "episode_seconds"):
+        v = getattr(a, name)
+        if not (math.isfinite(v) and v > 0):
+            ap.error(f"--{name.replace('_', '-')} must be a positive number (got {v})")
+    if a.directions < 1 or not 1 <= a.top <= a.directions or not 1 <= a.max_iterations <= MAX_ITERATIONS \
+            or a.pitch_weight < 0 or a.hit_weight < 0 or a.seed < 0:
+        ap.error(f"need --directions >= 1, 1 <= --top <= --directions, 1 <= --max-iterations <= {MAX_ITERATIONS}, "
+                 f"--pitch-weight >= 0, --hit-weight >= 0, --seed >= 0")
+    if a.episode_seconds < 120.0:
+        ap.error("--episode-seconds must be >= 120 (the score starts at 60 s)")
+    if a.measure_scales:
+        print(json.dumps(measure_scales(a.seed, a.episode_seconds)))
+        return 0
+    out = Path(a.export or f"runs/ars_CompensatorGains-v0_s{a.seed}.npz")
+    pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
+                a.hit_weight, a.episode_seconds)
+    save_policy(pol, out)
+    print(f"[ars_comp] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
+    return 0
