@@ -29,8 +29,25 @@ the + and − perturbation of a direction run the same sea states and wave seeds
 too. Cost of an episode::
 
     ln(σ_h / σ_h,skyhook) + w_p · ln(σ_θ / σ_θ,skyhook) + w_hit · (end-stop hits in the episode)
+        + w_margin · mean_t max(|s| − m0, 0)²
 
-(σ over t ≥ 60 s, hits over the whole episode; the winch pattern's cost plus the hit term). Wave seeds are
+(σ and the margin mean over t ≥ 60 s, hits over the whole episode; the winch pattern's cost plus the hit and
+stroke-margin terms; s = the ``comp_stroke`` observation channel, the stroke as a fraction of the half stroke,
+read from the observation after every control step exactly as the single-environment policy reads it). The
+margin term is dense where the hit count is sparse: it charges every step the stroke spends beyond m0 (default
+0.85) of the half stroke. Defaults (:data:`DEFAULT_HIT_WEIGHT`, :data:`DEFAULT_MARGIN_WEIGHT`,
+:data:`DEFAULT_MARGIN_START`): w_hit = 0.3 (one extra hit in an episode costs as much as ≈ 30 % more σ_h) and
+w_margin = 1000. The stroke spends very little time beyond 0.85 (σ(s) ≈ 0.26; the end-stop hits are short
+excursions): under skyhook the mean of max(|s| − 0.85, 0)² on the 12 training episodes of an iteration is
+≈ 1e-6 … 3e-5 (first iterations of the second probe), so w_margin = 30 — sized on the idea "0.95 for 10 % of
+the window costs ≈ 3 % of σ_h" — contributes ≤ 0.001 and does nothing; 1000 makes skyhook's term ≈ 0.001 …
+0.03 and a doubled tail a few % of σ_h (a stroke at 0.95 for 10 % of the window would cost 1.0). The first
+probe's cost is ``--hit-weight 0.05 --margin-weight 0``.
+
+Optional stop guard (``stop_guard`` = g, 0 = off; stored in the policy file's metadata): outside the linear
+part, when |s| > g and the stroke moves outward (s · ṡ > 0), the action is (1, 1) — maximum stiffness and
+damping — whatever the skyhook law and the residual say; applied after the clip, identically in the single-env
+policy and the batched rollout. Wave seeds are
 fresh every iteration: ``1000·code + j + 50000 + 100·iteration + 100000·seed`` (iteration < 100) — never an
 evaluation (+0…400), tuning (+500), validation (+700), Hover design (+900), final (+20000…), clairvoyant-teacher
 (+30000…) or WinchPayout-ARS (+40000 + 100·iteration, iteration < 100) seed.
@@ -48,7 +65,8 @@ from .common import COMPENSATOR_ID, ObsReader, nearest_key
 
 __all__ = ["ARSCompensatorPolicy", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
-           "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "main"]
+           "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
+           "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "main"]
 
 ENV_ID = COMPENSATOR_ID
 #: ``meta["algo"]`` of the policy files (scripts/evaluate.py dispatches on env_id + algo)
@@ -73,6 +91,10 @@ TRAIN_SEED_OFFSET = 50000
 #: iterations per run: 100·iteration stays below 10000, so the training seeds of one run stay in
 #: [+50000, +59900] and never reach another run's (+100000·seed) or WinchPayout ARS's (+40000 … +49900) seeds
 MAX_ITERATIONS = 100
+#: cost defaults (module docstring): hit weight, stroke-margin weight and start (fraction of the half stroke)
+DEFAULT_HIT_WEIGHT = 0.3
+DEFAULT_MARGIN_WEIGHT = 1000.0
+DEFAULT_MARGIN_START = 0.85
 N_HISTORY = max(LAG_STEPS) + 1
 GAIN_KEYS = ("c_sky", "b0", "k0", "margin", "k_stop")
 N_ACT = 2
@@ -130,6 +152,29 @@ def _residual(theta, phi):
     return (theta * phi[:, None, :]).sum(axis=2)
 
 
+def margin_penalty(s, m0: float = DEFAULT_MARGIN_START):
+    """max(|s| − m0, 0)² element-wise (s = stroke as a fraction of the half stroke)."""
+    return np.maximum(np.abs(np.asarray(s, float)) - float(m0), 0.0) ** 2
+
+
+def stop_guard_mask(reader, obs, guard: float):
+    """Rows of a batch of observations ``(n, obs_size)`` where the stop guard acts: |s| > guard and s · ṡ > 0
+    (s = ``comp_stroke``, fraction of the half stroke; ṡ = ``comp_stroke_vel``); all False when guard is 0."""
+    obs = np.asarray(obs)
+    if not guard:
+        return np.zeros(obs.shape[0], bool)
+    s = reader.batch(obs, "comp_stroke")
+    sd = reader.batch(obs, "comp_stroke_vel")
+    return (np.abs(s) > float(guard)) & (s * sd > 0.0)
+
+
+def _apply_guard(a, reader, obs, guard: float):
+    """(1, 1) — maximum stiffness and damping — on the rows of ``a`` (n, 2) where the stop guard acts."""
+    if not guard:
+        return a
+    return np.where(stop_guard_mask(reader, obs, guard)[:, None], 1.0, a)
+
+
 # ============================================================================ the policy (one environment)
 class ARSCompensatorPolicy:
     """A trained linear residual over skyhook (module docstring) with SB3's ``predict``. Bind it to the
@@ -149,6 +194,10 @@ class ARSCompensatorPolicy:
         self.meta.setdefault("algo", ALGO)
         self.meta.setdefault("env_id", ENV_ID)
         self.meta.setdefault("env_kwargs", {})
+        self.meta.setdefault("stop_guard", 0.0)
+        self.stop_guard = float(self.meta["stop_guard"] or 0.0)
+        if not 0.0 <= self.stop_guard <= 1.0:
+            raise ValueError(f"ARSCompensatorPolicy: stop_guard must be 0 (off) or in (0, 1] (got {self.stop_guard})")
         self.name = name
         self.env = None
         self._th = None
@@ -181,8 +230,10 @@ class ARSCompensatorPolicy:
             self.base.reset()
             self._th = self.theta[nearest_key(self.theta, self.u.sea[0])][None]
         a_base = np.asarray(self.base.act(o), float)
-        phi = self._feat(np.asarray(obs, np.float32).reshape(1, -1), first)
+        o32 = np.asarray(obs, np.float32).reshape(1, -1)
+        phi = self._feat(o32, first)
         a = np.clip(a_base + _residual(self._th, phi)[0], -1.0, 1.0)
+        a = _apply_guard(a[None], self.reader, o32, self.stop_guard)[0]
         out = a.astype(np.float32)
         return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
 
@@ -233,10 +284,13 @@ class _Batch:
                         axis=1)
 
 
-def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0, record_actions: bool = False):
-    """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i], (2, F)); returns
-    σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard and the end-stop hits of the whole episode, per copy
-    (σ NaN for a copy that ended early), and with ``record_actions`` the actions (T, n, 2) as stepped."""
+def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0, record_actions: bool = False,
+                  margin_start: float = DEFAULT_MARGIN_START, stop_guard: float = 0.0):
+    """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i], (2, F), and the
+    stop guard ``stop_guard``); returns σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard, the end-stop hits of
+    the whole episode and the mean over t ≥ discard of :func:`margin_penalty` (|s|, ``margin_start``) of the
+    ``comp_stroke`` observation after every step, per copy (σ and margin NaN for a copy that ended early), and
+    with ``record_actions`` the actions (T, n, 2) as stepped."""
     n = venv.num_envs
     seeds = [int(s) for s in seeds]
     theta = np.asarray(theta, float)
@@ -250,17 +304,20 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
     H = np.zeros((T, n))
     P = np.zeros((T, n))
     t = np.zeros(T)
+    M = np.zeros((T, n))
     hits = np.zeros(n)
     ended = np.zeros(n, bool)
     acts = np.zeros((T, n, N_ACT), np.float32) if record_actions else None
     for k in range(T):
         phi = batch.features(obs, k == 0)
-        a = np.clip(batch.base_action(obs) + _residual(theta, phi), -1.0, 1.0).astype(np.float32)
+        a = np.clip(batch.base_action(obs) + _residual(theta, phi), -1.0, 1.0)
+        a = _apply_guard(a, batch.reader, obs, stop_guard).astype(np.float32)
         if record_actions:
             acts[k] = a
         obs, _r, term, trunc, infos = venv.step(a)
         H[k] = infos["fish_heave"]
         P[k] = infos["fish_pitch"]
+        M[k] = margin_penalty(batch.reader.batch(obs, "comp_stroke"), margin_start)
         t[k] = infos["t"][0]
         hits += np.where(ended, 0, infos["end_stop_hits"])
         if k < T - 1:
@@ -268,9 +325,11 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
     w = t >= discard
     sh = H[w].std(axis=0)
     sp = np.degrees(P[w].std(axis=0))
+    mg = M[w].mean(axis=0)
     sh[ended] = np.nan
     sp[ended] = np.nan
-    return (sh, sp, hits, acts) if record_actions else (sh, sp, hits)
+    mg[ended] = np.nan
+    return (sh, sp, hits, mg, acts) if record_actions else (sh, sp, hits, mg)
 
 
 def _setup(episode_seconds: float, n_copies: int, scales: dict):
@@ -323,12 +382,15 @@ def measure_scales(seed: int = 0, episode_seconds: float = 180.0) -> dict:
 
 # ============================================================================ training
 def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERATIONS, directions: int = 8,
-          top: int = 4, nu: float = 0.01, alpha: float = 0.01, pitch_weight: float = 0.5, hit_weight: float = 0.05,
-          episode_seconds: float = 180.0, fail_penalty: float = 1.0, progress: bool = True,
-          log=print) -> ARSCompensatorPolicy:
+          top: int = 4, nu: float = 0.01, alpha: float = 0.01, pitch_weight: float = 0.5,
+          hit_weight: float = DEFAULT_HIT_WEIGHT, episode_seconds: float = 180.0, fail_penalty: float = 1.0,
+          margin_weight: float = DEFAULT_MARGIN_WEIGHT, margin_start: float = DEFAULT_MARGIN_START,
+          stop_guard: float = 0.0, progress: bool = True, log=print) -> ARSCompensatorPolicy:
     """ARS V1-t (module docstring) on the 12 evaluation (Hs, Tp, heading) entries with training wave seeds; one
     search per sea state of the skyhook table, sharing one batched rollout per iteration. Cost of an episode:
-    ln(σ_h/σ_h,sky) + pitch_weight · ln(σ_θ/σ_θ,sky) + hit_weight · hits on the same waves. Stops after
+    ln(σ_h/σ_h,sky) + pitch_weight · ln(σ_θ/σ_θ,sky) + hit_weight · hits + margin_weight · mean max(|s| −
+    margin_start, 0)² on the same waves (``margin_weight=0, hit_weight=0.05``: the first probe's cost), with the
+    stop guard ``stop_guard`` (0 = off) in every rollout and in the returned policy. Stops after
     ``max_iterations`` (≤ :data:`MAX_ITERATIONS`) or when the next iteration would pass ``minutes`` of wall time."""
     if not 1 <= int(max_iterations) <= MAX_ITERATIONS:
         raise ValueError(f"max_iterations must be in 1..{MAX_ITERATIONS} (training seeds stay disjoint)")
@@ -353,7 +415,8 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
     curve = []
     log(f"[ars_comp] seed {seed}: {C} sea states x {K} directions x 2 signs + 2 x {n_ref} reference episodes = "
         f"{n_copies} copies of {episode_seconds:g} s per iteration; nu={nu} alpha={alpha} top={top} "
-        f"pitch_weight={pitch_weight} hit_weight={hit_weight}; {N_ACT} x {N_FEATURES} weights per sea state")
+        f"pitch_weight={pitch_weight} hit_weight={hit_weight} margin_weight={margin_weight} "
+        f"margin_start={margin_start} stop_guard={stop_guard}; {N_ACT} x {N_FEATURES} weights per sea state")
     it = 0
     last = 0.0
     while it < max_iterations:
@@ -377,14 +440,17 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
                 seas.append(sea)
                 seeds.append(_train_seed(s, it, seed))
                 th.append(theta[ci] if which == "theta" else np.zeros((N_ACT, N_FEATURES)))
-        sh, sp, hits = rollout_batch(venv, batch, seas, seeds, np.array(th))
+        sh, sp, hits, mg = rollout_batch(venv, batch, seas, seeds, np.array(th), margin_start=margin_start,
+                                         stop_guard=stop_guard)
         cur_h, base_h = sh[n_pert:n_pert + n_ref], sh[n_pert + n_ref:]
+        cur_m, base_m = mg[n_pert:n_pert + n_ref], mg[n_pert + n_ref:]
         cur_p, base_p = sp[n_pert:n_pert + n_ref], sp[n_pert + n_ref:]
         cur_hits, base_hits = hits[n_pert:n_pert + n_ref], hits[n_pert + n_ref:]
         with np.errstate(invalid="ignore", divide="ignore"):
             cost = np.where(np.isfinite(sh[:n_pert]),
                             np.log(sh[:n_pert] / base_h[owner]) + pitch_weight * np.log(sp[:n_pert] / base_p[owner])
-                            + hit_weight * hits[:n_pert], fail_penalty + hit_weight * hits[:n_pert])
+                            + hit_weight * hits[:n_pert] + margin_weight * mg[:n_pert],
+                            fail_penalty + hit_weight * hits[:n_pert])
         j = 0
         steps = []
         for ci, k in enumerate(keys):
@@ -403,23 +469,28 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
         last = time.perf_counter() - t0
         curve.append({"iteration": it, "heave_ratio": pooled_h, "pitch_ratio": pooled_p, "hits": float(cur_hits.sum()),
                       "hits_skyhook": float(base_hits.sum()), "hits_perturbed_mean": float(hits[:n_pert].mean()),
+                      "margin": float(np.nanmean(cur_m)), "margin_skyhook": float(np.nanmean(base_m)),
                       "cost": float(np.nanmean(np.log(cur_h / base_h) + pitch_weight * np.log(cur_p / base_p)
-                                               + hit_weight * cur_hits)),
+                                               + hit_weight * cur_hits + margin_weight * cur_m)),
                       "seconds": last, "failures": int(np.sum(~np.isfinite(sh)))})
         if progress:
             log(f"[ars_comp] it {it:3d} ({last:5.1f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): policy "
                 f"before this step vs skyhook on {n_ref} fresh training episodes: heave {100 * (pooled_h - 1):+6.2f} %, "
                 f"pitch {100 * (pooled_p - 1):+5.1f} %, hits {int(cur_hits.sum())} (skyhook {int(base_hits.sum())}; "
-                f"perturbed mean {hits[:n_pert].mean():.2f}/episode); |step| {', '.join(f'{s:.4f}' for s in steps)}")
+                f"perturbed mean {hits[:n_pert].mean():.2f}/episode); margin {np.nanmean(cur_m):.2e} (skyhook "
+                f"{np.nanmean(base_m):.2e}); |step| {', '.join(f'{s:.4f}' for s in steps)}")
         it += 1
     steps_per_episode = int(venv.envs[0].max_steps)
     venv.close()
     wall = time.perf_counter() - t_start
     meta = {"algo": ALGO, "env_id": ENV_ID, "env_kwargs": {}, "seed": int(seed), "iterations": it,
+            "stop_guard": float(stop_guard),
             "num_timesteps": it * n_copies * steps_per_episode, "wall_seconds": wall,
             "hyperparameters": {"directions": K, "top": top, "nu": nu, "alpha": alpha, "pitch_weight": pitch_weight,
                                 "hit_weight": hit_weight, "episode_seconds": episode_seconds, "minutes": minutes,
-                                "max_iterations": max_iterations, "fail_penalty": fail_penalty},
+                                "max_iterations": max_iterations, "fail_penalty": fail_penalty,
+                                "margin_weight": margin_weight, "margin_start": margin_start,
+                                "stop_guard": float(stop_guard)},
             "train_seeds": f"1000*code + j + {TRAIN_SEED_OFFSET} + 100*iteration + 100000*{int(seed)}",
             "curve": curve}
     return ARSCompensatorPolicy({k: theta[ci] for ci, k in enumerate(keys)}, table, FEATURE_SCALES, meta,
@@ -474,8 +545,17 @@ def main(argv=None) -> int:
     ap.add_argument("--nu", type=float, default=0.01, help="exploration noise in parameter space")
     ap.add_argument("--alpha", type=float, default=0.01, help="step size")
     ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
-    ap.add_argument("--hit-weight", type=float, default=0.05, help="cost of one end-stop hit (in ln σ units)")
-    ap.add_argument("--episode-seconds", type=float, default=180.0)
+    ap.add_argument("--hit-weight", type=float, default=DEFAULT_HIT_WEIGHT,
+                    help=f"cost of one end-stop hit (in ln σ units; default {DEFAULT_HIT_WEIGHT}; the first probe: 0.05)")
+    ap.add_argument("--margin-weight", type=float, default=DEFAULT_MARGIN_WEIGHT,
+                    help="weight of the stroke-margin term mean max(|s| - m0, 0)^2 over the scored window "
+                         f"(default {DEFAULT_MARGIN_WEIGHT:g}; 0 = the first probe's cost)")
+    ap.add_argument("--margin-start", type=float, default=DEFAULT_MARGIN_START,
+                    help=f"m0 of the stroke-margin term, fraction of the half stroke (default {DEFAULT_MARGIN_START})")
+    ap.add_argument("--stop-guard", type=float, default=0.0,
+                    help="stop guard threshold g in (0, 1]: (max stiffness, max damping) when |s| > g and moving "
+                         "outward; stored in the policy file (default 0 = off; e.g. 0.9)")
+    ap.add_argument("--episode-seconds", type=float, default=180.0, help="training episode length (s; >= 120)")
     ap.add_argument("--measure-scales", action="store_true", help="print the feature scales (skyhook, training "
                                                                   "seeds of iteration 0) and exit")
     ap.add_argument("--export", default=None, help="policy file (default runs/ars_CompensatorGains-v0_s<seed>.npz)")
@@ -485,9 +565,11 @@ def main(argv=None) -> int:
         if not (math.isfinite(v) and v > 0):
             ap.error(f"--{name.replace('_', '-')} must be a positive number (got {v})")
     if a.directions < 1 or not 1 <= a.top <= a.directions or not 1 <= a.max_iterations <= MAX_ITERATIONS \
-            or a.pitch_weight < 0 or a.hit_weight < 0 or a.seed < 0:
+            or not a.pitch_weight >= 0 or not a.hit_weight >= 0 or a.seed < 0 or not a.margin_weight >= 0 \
+            or not 0 <= a.margin_start < 1 or not 0 <= a.stop_guard <= 1:
         ap.error(f"need --directions >= 1, 1 <= --top <= --directions, 1 <= --max-iterations <= {MAX_ITERATIONS}, "
-                 f"--pitch-weight >= 0, --hit-weight >= 0, --seed >= 0")
+                 f"--pitch-weight >= 0, --hit-weight >= 0, --margin-weight >= 0, 0 <= --margin-start < 1, "
+                 f"0 <= --stop-guard <= 1, --seed >= 0")
     if a.episode_seconds < 120.0:
         ap.error("--episode-seconds must be >= 120 (the score starts at 60 s)")
     if a.measure_scales:
@@ -495,7 +577,8 @@ def main(argv=None) -> int:
         return 0
     out = Path(a.export or f"runs/ars_CompensatorGains-v0_s{a.seed}.npz")
     pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
-                a.hit_weight, a.episode_seconds)
+                a.hit_weight, a.episode_seconds, margin_weight=a.margin_weight, margin_start=a.margin_start,
+                stop_guard=a.stop_guard)
     save_policy(pol, out)
     print(f"[ars_comp] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
     return 0

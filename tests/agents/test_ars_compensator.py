@@ -1,7 +1,9 @@
 """ARS linear residual over the skyhook law (issue 14, agents/ars_compensator.py): Θ = 0 is the skyhook law, the
 deployable single-environment policy acts exactly as the batched training rollout, it is causal, its file
-round-trips (and scripts/evaluate.py tells the ARS files apart by their metadata), training seeds are disjoint
-from every other seed set, and a tiny training runs on the batched vector env."""
+round-trips (and scripts/evaluate.py tells the ARS files apart by their metadata), the stroke-margin cost term of
+the batched rollout is the single env's, the optional stop guard acts exactly where its condition holds (and the
+same in both), training seeds are disjoint from every other seed set, and a tiny training runs on the batched
+vector env."""
 from __future__ import annotations
 
 import json
@@ -61,8 +63,9 @@ def test_zero_weights_are_the_skyhook_law(env):
 
 
 def test_single_env_policy_equals_the_batched_training_rollout(env):
-    """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ and
-    the same end-stop hits."""
+    """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ, the
+    same end-stop hits and the same stroke-margin term (from the ``comp_stroke`` observation, which is the true
+    stroke / half stroke of the simulator to float32 precision)."""
     from towenv.envs.vector import CompensatorGainsVectorEnv
     pol = _policy(scale=0.05).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
@@ -73,8 +76,12 @@ def test_single_env_policy_equals_the_batched_training_rollout(env):
                                      episode_seconds=SECONDS)
     batch = AC._Batch(venv, pol.base_table, pol.scales)
     theta = np.array([pol.theta[nearest_key(pol.theta, s)] for s in seas])
-    sh, sp, hits, acts = AC.rollout_batch(venv, batch, seas, seeds, theta, discard=DISCARD, record_actions=True)
+    m0 = 0.2                                            # low enough for a non-zero term in 30 s episodes
+    sh, sp, hits, mg, acts = AC.rollout_batch(venv, batch, seas, seeds, theta, discard=DISCARD, record_actions=True,
+                                              margin_start=m0)
     venv.close()
+    assert np.all(mg > 0)
+    reader = pol.reader
     for i, (sea, s) in enumerate(zip(seas, seeds)):
         single = _actions(env, pol, sea, s)
         assert single.shape == acts[:, i].shape
@@ -84,9 +91,69 @@ def test_single_env_policy_equals_the_batched_training_rollout(env):
         assert rec.data["heave"][w].std() == pytest.approx(sh[i], rel=1e-9, abs=1e-12)
         assert np.degrees(rec.data["pitch"][w].std()) == pytest.approx(sp[i], rel=1e-9, abs=1e-12)
         assert rec.data["hits"][-1] == hits[i]
+        # the margin term from the single env's observations after every step, over the same window
+        obs, _ = env.reset(seed=s, options={"sea_state": sea, "sea_seed": s})
+        pol.reset()
+        strokes, ts = [], []
+        for k in range(env.unwrapped.max_steps):
+            a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
+            obs, _r, term, trunc, info = env.step(a)
+            strokes.append(reader(obs, "comp_stroke"))
+            ts.append(info["t"])
+        ts = np.array(ts)
+        assert np.array_equal(ts, rec.data["t"])
+        single_m = AC.margin_penalty(np.array(strokes)[ts >= DISCARD], m0).mean()
+        assert single_m == pytest.approx(mg[i], rel=1e-9, abs=1e-15)
+        true_m = AC.margin_penalty(rec.data["stroke"][w] / rec.half_stroke, m0).mean()
+        assert true_m == pytest.approx(mg[i], rel=1e-4)
     # and the weights matter: the residual changes the actions away from skyhook
     sky = _actions(env, make_baseline("skyhook", env), seas[1], seeds[1])
     assert np.max(np.abs(sky - acts[:, 1])) > 1e-3
+
+
+def test_stop_guard_acts_exactly_where_its_condition_holds(env):
+    """With the guard on, Θ = 0 gives the skyhook action on every step where the guard condition (|s| > g, s·ṡ > 0,
+    read from the observation) is false, and (1, 1) where it holds: it differs from skyhook exactly on the guarded
+    steps where skyhook does not already command (1, 1). The batched rollout with the guard acts the same."""
+    from towenv.envs.vector import CompensatorGainsVectorEnv
+    g = 0.3                                             # low enough to act often in a 30 s code-5 episode
+    table = load_tuned()["skyhook"]
+    pol = AC.ARSCompensatorPolicy({k: np.zeros((AC.N_ACT, AC.N_FEATURES)) for k in table}, table,
+                                  meta={"stop_guard": g}).bind_env(env)
+    sky = make_baseline("skyhook", env)
+    sea, seed = env.unwrapped.eval_sea_states()[11]
+    seed += 123456
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    A, S, M = [], [], []
+    for k in range(env.unwrapped.max_steps):
+        start = np.array([k == 0])
+        a, _ = pol.predict(obs, episode_start=start)
+        b, _ = sky.predict(obs, episode_start=start)
+        s, sd = pol.reader(obs, "comp_stroke"), pol.reader(obs, "comp_stroke_vel")
+        assert AC.stop_guard_mask(pol.reader, np.asarray(obs)[None], g)[0] == (abs(s) > g and s * sd > 0)
+        A.append(np.array(a))
+        S.append(np.array(b))
+        M.append(abs(s) > g and s * sd > 0)
+        obs, _r, term, trunc, _ = env.step(a)
+        assert not term and (not trunc or k == env.unwrapped.max_steps - 1)
+    A, S, M = np.array(A), np.array(S), np.array(M)
+    assert 0 < M.sum() < len(M)
+    assert np.array_equal(A[~M], S[~M])
+    assert np.all(A[M] == 1.0)
+    differs = np.any(A != S, axis=1)
+    assert np.array_equal(differs, M & np.any(S != 1.0, axis=1)) and differs.any()
+    # the batched rollout with the guard: the same actions
+    venv = CompensatorGainsVectorEnv(num_envs=1, autoreset_mode="NextStep", batch_infos=True,
+                                     episode_seconds=SECONDS)
+    batch = AC._Batch(venv, table, pol.scales)
+    *_, acts = AC.rollout_batch(venv, batch, [sea], [seed], np.zeros((1, AC.N_ACT, AC.N_FEATURES)),
+                                discard=DISCARD, record_actions=True, stop_guard=g)
+    venv.close()
+    np.testing.assert_allclose(acts[:, 0], A, rtol=0, atol=1e-9)
+    # off by default and for old files without the key
+    assert AC.ARSCompensatorPolicy({k: np.zeros((AC.N_ACT, AC.N_FEATURES)) for k in table}, table).stop_guard == 0.0
+    with pytest.raises(ValueError, match="stop_guard"):
+        AC.ARSCompensatorPolicy({}, table, meta={"stop_guard": 1.5})
 
 
 def test_policy_is_causal(env):
@@ -120,8 +187,10 @@ def test_policy_is_causal(env):
 
 def test_policy_file_round_trip_and_refusal(tmp_path, env):
     pol = _policy(scale=0.01, seed=3)
+    pol.meta["stop_guard"] = pol.stop_guard = 0.9
     f = AC.save_policy(pol, tmp_path / "p.npz")
     back = AC.load_policy(f)
+    assert back.stop_guard == 0.9 and back.meta["stop_guard"] == 0.9
     assert sorted(back.theta) == sorted(pol.theta)
     assert all(np.array_equal(back.theta[k], pol.theta[k]) for k in pol.theta)
     assert back.base_table == json.loads(json.dumps(pol.base_table))
@@ -191,4 +260,14 @@ def test_training_smoke_on_the_batched_env():
     assert c0["heave_ratio"] == pytest.approx(1.0) and c0["hits"] == c0["hits_skyhook"]   # Θ = 0 at first
     assert all(v.shape == (AC.N_ACT, AC.N_FEATURES) for v in pol.theta.values())
     assert any(np.linalg.norm(v) > 0 for v in pol.theta.values())
-    assert pol.meta["hyperparameters"]["hit_weight"] == 0.05
+    hp = pol.meta["hyperparameters"]
+    assert hp["hit_weight"] == AC.DEFAULT_HIT_WEIGHT and hp["margin_weight"] == AC.DEFAULT_MARGIN_WEIGHT
+    assert hp["margin_start"] == AC.DEFAULT_MARGIN_START and hp["stop_guard"] == 0.0 == pol.stop_guard
+    assert c0["margin"] == pytest.approx(c0["margin_skyhook"])
+
+
+def test_cli_refuses_bad_cost_options():
+    for bad in (["--margin-start", "1.2"], ["--margin-weight", "-1"], ["--stop-guard", "1.5"],
+                ["--hit-weight", "nan"]):
+        with pytest.raises(SystemExit):
+            AC.main(bad)
