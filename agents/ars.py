@@ -29,7 +29,6 @@ tuning (+500), validation (+700), Hover design (+900), final (+20000) or clairvo
 """
 from __future__ import annotations
 
-import json
 import math
 import time
 from pathlib import Path
@@ -178,13 +177,9 @@ class _Batch:
 def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0):
     """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i]); returns
     σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard per copy (NaN for a copy that ended early)."""
+    from .common import reset_copies
     n = venv.num_envs
-    seeds = [int(s) for s in seeds]
-    obs = None
-    for i in range(n):
-        mask = np.zeros(n, bool)
-        mask[i] = True
-        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    obs = reset_copies(venv, seas, seeds)
     batch.set_seas(seas)
     T = venv.envs[0].max_steps
     H = np.zeros((T, n))
@@ -312,31 +307,18 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
 def save_policy(policy: ARSPolicy, path: str | Path) -> Path:
     """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON),
     atomically."""
-    from towenv.atomic import atomic_savez
-    path = Path(path)
-    keys = sorted(policy.theta)
+    from .common import save_ars_file
     meta = dict(policy.meta) | {"features": feature_names(), "lag_steps": list(LAG_STEPS),
                                 "history_channels": list(HISTORY_CHANNELS), "instant_channels": list(INSTANT_CHANNELS)}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_savez(path, {"theta": np.array([policy.theta[k] for k in keys]), "keys": np.array(keys),
-                        "base_table": np.array(json.dumps(policy.base_table)),
-                        "scales": np.array(json.dumps(policy.scales)), "meta": np.array(json.dumps(meta))})
-    return path
+    return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta)
 
 
 def load_ars_policy(path: str | Path) -> ARSPolicy:
     """Read a policy written by :func:`save_policy` (bind it to an environment before use)."""
-    path = Path(path)
-    with np.load(path, allow_pickle=False) as z:
-        if "theta" not in z or "keys" not in z:
-            raise ValueError(f"{path}: not an ARS policy file (no theta/keys)")
-        meta = json.loads(str(z["meta"]))
-        if meta.get("features") != feature_names():
-            raise ValueError(f"{path}: its features differ from this version's ({len(meta.get('features', []))} "
-                             f"against {N_FEATURES})")
-        theta = {str(k): np.array(v) for k, v in zip(z["keys"], z["theta"])}
-        return ARSPolicy(theta, json.loads(str(z["base_table"])), json.loads(str(z["scales"])), meta,
-                         name=path.stem)
+    from .common import read_ars_file
+    theta, table, scales, meta = read_ars_file(path, feature_names(), {"env_id": ENV_ID, "algo": "ars"},
+                                               "an ARS along-cable-residual policy")
+    return ARSPolicy(theta, table, scales, meta, name=Path(path).stem)
 
 
 def main(argv=None) -> int:

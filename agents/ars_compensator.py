@@ -61,7 +61,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import COMPENSATOR_ID, ObsReader, nearest_key
+from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset_copies, save_ars_file
 
 __all__ = ["ARSCompensatorPolicy", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
@@ -292,13 +292,8 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
     ``comp_stroke`` observation after every step, per copy (σ and margin NaN for a copy that ended early), and
     with ``record_actions`` the actions (T, n, 2) as stepped."""
     n = venv.num_envs
-    seeds = [int(s) for s in seeds]
     theta = np.asarray(theta, float)
-    obs = None
-    for i in range(n):
-        mask = np.zeros(n, bool)
-        mask[i] = True
-        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    obs = reset_copies(venv, seas, seeds)
     batch.set_seas(seas)
     T = venv.envs[0].max_steps
     H = np.zeros((T, n))
@@ -357,12 +352,7 @@ def measure_scales(seed: int = 0, episode_seconds: float = 180.0) -> dict:
     table, ev, venv, batch = probe
     seas = [s for s, _ in ev]
     seeds = [_train_seed(b, 0, seed) for _, b in ev]
-    n = venv.num_envs
-    obs = None
-    for i in range(n):
-        mask = np.zeros(n, bool)
-        mask[i] = True
-        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    obs = reset_copies(venv, seas, seeds)
     batch.set_seas(seas)
     rows = []
     for k in range(venv.envs[0].max_steps):
@@ -501,35 +491,17 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
 def save_policy(policy: ARSCompensatorPolicy, path: str | Path) -> Path:
     """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON with
     ``env_id`` and ``algo``), atomically."""
-    from towenv.atomic import atomic_savez
-    path = Path(path)
-    keys = sorted(policy.theta)
     meta = dict(policy.meta) | {"features": feature_names(), "lag_steps": list(LAG_STEPS),
                                 "history_channels": list(HISTORY_CHANNELS), "instant_channels": list(INSTANT_CHANNELS),
                                 "nonlinear": list(NONLINEAR)}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_savez(path, {"theta": np.array([policy.theta[k] for k in keys]), "keys": np.array(keys),
-                        "base_table": np.array(json.dumps(policy.base_table)),
-                        "scales": np.array(json.dumps(policy.scales)), "meta": np.array(json.dumps(meta))})
-    return path
+    return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta)
 
 
 def load_policy(path: str | Path) -> ARSCompensatorPolicy:
     """Read a policy written by :func:`save_policy` (bind it to an environment before use)."""
-    path = Path(path)
-    with np.load(path, allow_pickle=False) as z:
-        if "theta" not in z or "keys" not in z or "meta" not in z:
-            raise ValueError(f"{path}: not an ARS policy file (no theta/keys/meta)")
-        meta = json.loads(str(z["meta"]))
-        if meta.get("env_id") != ENV_ID or meta.get("algo") != ALGO:
-            raise ValueError(f"{path}: not an ARS skyhook-residual policy (env_id {meta.get('env_id')!r}, algo "
-                             f"{meta.get('algo')!r})")
-        if meta.get("features") != feature_names():
-            raise ValueError(f"{path}: its features differ from this version's ({len(meta.get('features', []))} "
-                             f"against {N_FEATURES})")
-        theta = {str(k): np.array(v) for k, v in zip(z["keys"], z["theta"])}
-        return ARSCompensatorPolicy(theta, json.loads(str(z["base_table"])), json.loads(str(z["scales"])), meta,
-                                    name=path.stem)
+    theta, table, scales, meta = read_ars_file(path, feature_names(), {"env_id": ENV_ID, "algo": ALGO},
+                                               "an ARS skyhook-residual policy")
+    return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem)
 
 
 def main(argv=None) -> int:

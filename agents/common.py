@@ -100,3 +100,52 @@ def nearest_key(table: dict[str, Any], sea) -> str:
         return (math.log(h / hs)) ** 2 + (math.log(t / tp)) ** 2
 
     return min(table, key=dist)
+
+
+def reset_copies(venv, seas, seeds):
+    """Reset copy i of the batched vector env ``venv`` into (seas[i], seeds[i]) — one masked reset per copy, as
+    the ARS trainings (agents/ars.py, agents/ars_compensator.py) need; returns the observations after the last."""
+    n = venv.num_envs
+    seeds = [int(s) for s in seeds]
+    obs = None
+    for i in range(n):
+        mask = np.zeros(n, bool)
+        mask[i] = True
+        obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
+    return obs
+
+
+def save_ars_file(path, theta: dict, base_table: dict, scales: dict, meta: dict):
+    """Write an ARS policy file (.npz, atomically): weights per sea-state key, the base law's gain table, the
+    feature scales and the metadata JSON. Returns the path."""
+    import json
+    from pathlib import Path
+    from towenv.atomic import atomic_savez
+    path = Path(path)
+    keys = sorted(theta)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_savez(path, {"theta": np.array([theta[k] for k in keys]), "keys": np.array(keys),
+                        "base_table": np.array(json.dumps(base_table)), "scales": np.array(json.dumps(scales)),
+                        "meta": np.array(json.dumps(meta))})
+    return path
+
+
+def read_ars_file(path, feature_names: list, expect: dict | None = None, what: str = "this kind of ARS policy"):
+    """Read an ARS policy file: (theta per key, base table, scales, meta). ValueError naming the file if it is not
+    one, if its metadata differ from ``expect`` (e.g. env_id, algo: then it is not ``what``), or if its features
+    differ from ``feature_names``."""
+    import json
+    from pathlib import Path
+    path = Path(path)
+    with np.load(path, allow_pickle=False) as z:
+        if "theta" not in z or "keys" not in z or "meta" not in z:
+            raise ValueError(f"{path}: not an ARS policy file (no theta/keys/meta)")
+        meta = json.loads(str(z["meta"]))
+        for k, v in (expect or {}).items():
+            if meta.get(k) != v:
+                raise ValueError(f"{path}: not {what} (its {k} is {meta.get(k)!r}, not {v!r})")
+        if meta.get("features") != list(feature_names):
+            raise ValueError(f"{path}: its features differ from this version's ({len(meta.get('features', []))} "
+                             f"against {len(feature_names)})")
+        theta = {str(k): np.array(v) for k, v in zip(z["keys"], z["theta"])}
+        return theta, json.loads(str(z["base_table"])), json.loads(str(z["scales"])), meta

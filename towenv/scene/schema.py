@@ -844,42 +844,42 @@ class Scene(_Model):
         roots: list[int] = []
         bottom_of: dict[str, list[int]] = {}
         spliced_to: dict[str, str] = {}
+        def parent_line(i, ln, field, ref, verb):
+            """The line ``ref`` names in lines[i].top.<field>, or None after recording why it cannot be."""
+            if ref not in line_idx:
+                probs.append((f"lines[{i}].top.{field}", f"unknown line {ref!r} (known lines: {known_lines})"))
+                return None
+            if ref == ln.name:
+                probs.append((f"lines[{i}].top.{field}", f"a line cannot {verb} itself (got {ref!r})"))
+                return None
+            return lines[line_idx[ref]]
+
         for i, ln in enumerate(lines):
             top = ln.top
             if isinstance(top, JunctionAttachment):
-                if top.line not in line_idx:
-                    refs_ok = False
-                    probs.append((f"lines[{i}].top.line", f"unknown line {top.line!r} (known lines: {known_lines})"))
-                elif top.line == ln.name:
-                    refs_ok = False
-                    probs.append((f"lines[{i}].top.line", f"a line cannot hang from itself (got {top.line!r})"))
-                else:
-                    parent = lines[line_idx[top.line]]
-                    if not top.distance < parent.length:
-                        probs.append((f"lines[{i}].top.distance",
-                                      f"must be < {parent.length:g} m, the length of line {top.line!r} "
-                                      f"(junction beyond the line's end) (got {top.distance!r})"))
+                parent = parent_line(i, ln, "line", top.line, "hang from")
+                refs_ok = refs_ok and parent is not None
+                if parent is not None and not top.distance < parent.length:
+                    probs.append((f"lines[{i}].top.distance",
+                                  f"must be < {parent.length:g} m, the length of line {top.line!r} "
+                                  f"(junction beyond the line's end) (got {top.distance!r})"))
             elif isinstance(top, SpliceAttachment):
-                if top.splice not in line_idx:
+                parent = parent_line(i, ln, "splice", top.splice, "be spliced to")
+                refs_ok = refs_ok and parent is not None
+                if parent is None:
+                    pass
+                elif parent.bottom != "free":
                     refs_ok = False
-                    probs.append((f"lines[{i}].top.splice", f"unknown line {top.splice!r} (known lines: {known_lines})"))
-                elif top.splice == ln.name:
+                    probs.append((f"lines[{i}].top.splice",
+                                  f"line {top.splice!r} must end free (bottom = \"free\") to be continued by a "
+                                  f"splice; its bottom is {parent.bottom!r}"))
+                elif top.splice in spliced_to:
                     refs_ok = False
-                    probs.append((f"lines[{i}].top.splice", f"a line cannot be spliced to itself (got {top.splice!r})"))
+                    probs.append((f"lines[{i}].top.splice",
+                                  f"line {top.splice!r} is already continued by line {spliced_to[top.splice]!r} "
+                                  f"(one line per splice; hang more lines from a junction)"))
                 else:
-                    parent = lines[line_idx[top.splice]]
-                    if parent.bottom != "free":
-                        refs_ok = False
-                        probs.append((f"lines[{i}].top.splice",
-                                      f"line {top.splice!r} must end free (bottom = \"free\") to be continued by a "
-                                      f"splice; its bottom is {parent.bottom!r}"))
-                    elif top.splice in spliced_to:
-                        refs_ok = False
-                        probs.append((f"lines[{i}].top.splice",
-                                      f"line {top.splice!r} is already continued by line {spliced_to[top.splice]!r} "
-                                      f"(one line per splice; hang more lines from a junction)"))
-                    else:
-                        spliced_to[top.splice] = ln.name
+                    spliced_to[top.splice] = ln.name
             elif isinstance(top, BodyAttachment):
                 if top.body not in body_idx:
                     refs_ok = False
