@@ -425,10 +425,10 @@ def summary(grid, beh, ser, newton):
         o.append("* **cables in series, one Newton iteration**: houbolt without step cuts "
                  + ", ".join(f"{s['n']} cables {fmt(s['res']['houbolt, no step cuts'][0])}" for s in ser)
                  + "; with the default 4 halvings " + ", ".join(f"{fmt(s['res']['houbolt'][0])}" for s in ser)
-                 + ". With the body–tail relaxation (docs/model-notes.md, \"Series coupling — relaxation\") every "
-                 "limit is well above the scenes' own Δt = 0.02 s; it drops from three to four cables and then only "
-                 "gently (the thesis found the monolithic step 'extremely small' beyond three with its unstable "
-                 "recursion; model.md 6.1). The failures are in the light 30 m sub-cables between the bodies.")
+                 + ", with the monolithic series coupling (the tails' top segments in their bodies' cliques of the "
+                 "tree tension solve, docs/model-notes.md \"Series coupling\"; the scenes' own Δt is 0.02 s). The "
+                 "thesis found the monolithic step 'extremely small' beyond three cables with its unstable "
+                 "recursion (model.md 6.1); the tree solve has no such limit.")
     for nw in newton:
         fails = [r for r in nw["rows"] if r["max_cuts"] == 0 and not r["stable"] and "diverged" in r["reason"]]
         first = min((r["dt"] for r in fails), default=None)

@@ -52,7 +52,7 @@ run are skipped; after :data:`MAX_PILOTS` pilots the fine default is returned. W
 flow (< :data:`FLOW_MARGIN` standard deviations of its velocity) the linear prediction is not trusted: the
 pilot decides, with the larger safety factor :data:`SAFETY_SLACK` (also on the screen) and no fewer segments than the scene's. This replaced a fixed
 Δt ≤ 0.02 s cap for series tows, whose body–tail coupling now converges at long steps (docs/model-notes.md
-"Series coupling — relaxation"). A selection takes 0.3–9 s with its pilots (the fine default's pilot
+"Series coupling"). A selection takes 0.3–9 s with its pilots (the fine default's pilot
 dominates).
 """
 from __future__ import annotations

@@ -49,6 +49,11 @@ and the 299a4cc checkout's ``_FASTMATH`` set to ``False``. The recipe is therefo
 Against the third file: positions ≤ 9.4e-10 m, angles ≤ 4e-11 rad, tensions ≤ 6.1e-6 N (of ~3e4) — round-off
 and Newton-tolerance level; the current kernel reproduces the new file bit for bit.
 
+Since the monolithic series coupling became the default (2026-12, issue 18: ``solver.series_coupling``), the test
+runs ``series_multitow`` with ``solver.series_coupling = "relaxed"``, the coupling this file was made with (the
+299a4cc checkout has no such field, so the override is applied by the test, not in ``CASES``); the monolithic
+coupling converges to the same solution (tests/unit/test_series_coupling.py).
+
 Do not regenerate it with a changed kernel unless the change is meant to alter the results.
 """
 from pathlib import Path

@@ -108,11 +108,12 @@ def test_series_relaxation_changes_the_rate_not_the_converged_step():
     """One Houbolt step of series_multitow (from a state 5 s into the sinusoid run) solved by the numpy
     twin to a tight tolerance with and without the body–tail relaxation: the same converged state (both
     converge at Δt = 0.02 s), while at Δt = 0.05 s only the relaxed iteration converges — the unrelaxed
-    one's gain is about m_tail/m_body = 1.3 > 1 for fish 2, whose tail outweighs it."""
+    one's gain is about m_tail/m_body = 1.3 > 1 for fish 2, whose tail outweighs it. (The relaxed series
+    coupling, solver.series_coupling = "relaxed"; the default monolithic one: tests/unit/test_series_coupling.py.)"""
     from towenv.verification import twin
 
     for dt, unrelaxed_converges in ((0.02, True), (0.05, False)):
-        sim = towenv.Simulator("series_multitow", dt=dt)
+        sim = towenv.Simulator("series_multitow", dt=dt, **{"solver.series_coupling": "relaxed"})
         sim.advance(5.0)
         sim.settings.tolerance = 1e-7           # N
         sim.settings.relative_tolerance = 1e-12

@@ -100,9 +100,11 @@ def test_results_do_not_depend_on_chunking():
 
 @pytest.mark.parametrize("record_interval", [None, 2.0])
 def test_divergence_is_the_same(record_interval):
-    """A run that fails (series tow at Δt 0.5 s, no step halvings): same error, same last good state and
-    counters, whether the failing step ends a record or falls inside one (record every 4 steps)."""
-    sc = load("series_multitow").with_overrides({"solver.dt": 0.5, "solver.max_step_cuts": 0})
+    """A run that fails (series tow at Δt 0.5 s, no step halvings, the relaxed series coupling — the default
+    monolithic one runs this case): same error, same last good state and counters, whether the failing step
+    ends a record or falls inside one (record every 4 steps)."""
+    sc = load("series_multitow").with_overrides({"solver.dt": 0.5, "solver.max_step_cuts": 0,
+                                                 "solver.series_coupling": "relaxed"})
     errs, sims = [], []
     for compiled in (False, True):
         sim = Simulator(sc)
@@ -121,7 +123,8 @@ def test_divergence_is_the_same(record_interval):
 
 
 def test_divergence_keeps_the_records_before_it():
-    sc = load("series_multitow").with_overrides({"solver.dt": 0.5, "solver.max_step_cuts": 0})
+    sc = load("series_multitow").with_overrides({"solver.dt": 0.5, "solver.max_step_cuts": 0,
+                                                 "solver.series_coupling": "relaxed"})
     sim = Simulator(sc)
     rec = Recorder(sim, 100)
     rec.record()

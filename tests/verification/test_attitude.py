@@ -46,6 +46,11 @@ def test_no_rechart_runs_are_bit_identical_to_the_euler_angle_kernel(scene):
     ref = _reference_cases()
     stored = np.load(DATA / "houbolt_reference.npz")
     overrides, steps = ref.CASES[scene]
+    # the reference predates the monolithic series coupling (the default since 2026-12): the series tow is run
+    # with the coupling it was made with, which the current code keeps as solver.series_coupling = "relaxed"
+    # (tests/unit/test_series_coupling.py checks that both converge to the same solution)
+    if scene == "series_multitow":
+        overrides = dict(overrides, **{"solver.series_coupling": "relaxed"})
     sim = ref.run(scene, overrides, steps)
     assert sim.stats["recharts"] == 0
     assert np.all(sim.body_chart == np.eye(3))

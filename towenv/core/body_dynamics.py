@@ -262,13 +262,20 @@ def condense_body(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr,
                   mnode, fnode):
     """Condense rigid body ``b`` onto its tow-point node ``a`` (all three rotations free): see ``_condense``."""
     return _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
-                     mnode, fnode, False)
+                     mnode, fnode, False, False, tmp3, tmp3)
 
 
 @njit(cache=True)
 def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
-              mnode, fnode, reduced):
+              mnode, fnode, reduced, implicit, prot, wdot):
     """Condense rigid body ``b`` onto its tow-point node ``a`` (model.md 3.4, Schur complement).
+
+    ``implicit`` (the Houbolt step's bodies with a monolithically coupled tail): the rotational stiffness and
+    damping estimates enter the condensation itself, as ``prot`` = diag(½Δt² k + (11Δt/12) c) added to both
+    sides of the rotational equation, (A_rr + P) ω̇ = M − A_rt a + P ω̇*, with ω̇* (``wdot``) the angular
+    acceleration of the current iterate: at convergence ω̇ = ω̇* and the equation is the body's own; during
+    the iteration the tow-point node sees the rotation the relaxed update will make (and the angle update is
+    then not relaxed again: ``houbolt.body_angle_update``).
 
     ``reduced``: the body pitches only (roll and yaw held by constraint moments), so only the pitch row and
     column of A_rr take part: A_rr⁻¹ is replaced by e_y e_yᵀ / A_rr,yy.
@@ -308,6 +315,10 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
     _cross(w[0], w[1], w[2], hvec[0], hvec[1], hvec[2], tmp3)
     for i in range(3):
         mb[i] -= tmp3[i]
+    if implicit:
+        for i in range(3):
+            arr[i, i] += prot[i]
+            mb[i] += prot[i] * wdot[i]
     if reduced:
         if not arr[1, 1] > 0.0:
             return False
@@ -343,6 +354,32 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
             mnode[a, i, j] += sacc
         fnode[a, i] += lam[0, i] * tmp3[0] + lam[1, i] * tmp3[1] + lam[2, i] * tmp3[2]
     return True
+
+
+@njit(cache=True)
+def aft_transfer(b, lam, atr, arrinv, bp, G, H):
+    """The condensed body's response to a global force f at its aft tow point (after :func:`_condense`, whose
+    ``atr`` and ``arrinv`` — the reduced one for pitch-only bodies — it reads): its angular acceleration gains
+    G f, G = A_rr⁻¹ S(r_aft) Λ, and its tow-point node's force gains H f, H = 1 − Λᵀ A_tr G (the force less
+    the inertial reaction of the rotation it causes). The monolithic series coupling puts the tail's pull into
+    the tension solve through H (``houbolt.node_local_solve``) and into the rotation through G."""
+    r0 = bp[b, BP_AFT_TOW_POINT]
+    r1 = bp[b, BP_AFT_TOW_POINT + 1]
+    r2 = bp[b, BP_AFT_TOW_POINT + 2]
+    for j in range(3):
+        # S(r_aft) Λ e_j = r_aft × (column j of Λ)
+        c0 = r1 * lam[2, j] - r2 * lam[1, j]
+        c1 = r2 * lam[0, j] - r0 * lam[2, j]
+        c2 = r0 * lam[1, j] - r1 * lam[0, j]
+        for i in range(3):
+            G[i, j] = arrinv[i, 0] * c0 + arrinv[i, 1] * c1 + arrinv[i, 2] * c2
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                # (Λᵀ A_tr)[i, k] = Σ_m Λ[m, i] A_tr[m, k]
+                acc += (lam[0, i] * atr[0, k] + lam[1, i] * atr[1, k] + lam[2, i] * atr[2, k]) * G[k, j]
+            H[i, j] = (1.0 if i == j else 0.0) - acc
 
 
 @njit(cache=True)
@@ -441,12 +478,13 @@ def aft_segment_stiffness(s, m_tail, stretched, tens, l0, ea, hdt2):
 
 @njit(cache=True)
 def aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tang, stretched, tens, l0, ea, hdt2,
-                             m_tail, bkc):
+                             m_tail, bkc, axial):
     """Adds to ``bkc[b, BK_STIFFNESS:BK_STIFFNESS + 3]`` the restoring stiffness of the tail's pull about the
     body's axes
     (e_i = body axis i): for a rotation δθ about e the aft point moves by u = e × d (d = aft point − body
     node) and K = T (d·t − (e·d)(e·t)) + k_ax (t·u)² + (T/ℓ)(|u|² − (t·u)²), clipped at 0 (t: direction
-    of the pull). Relaxation only (see :func:`aft_segment_stiffness`)."""
+    of the pull). ``axial`` False leaves out the k_ax term (the monolithic series coupling solves the pull's
+    change with the stretch in the Newton step). Relaxation only (see :func:`aft_segment_stiffness`)."""
     d0 = rs[c, 0] - rs[a, 0]
     d1 = rs[c, 1] - rs[a, 1]
     d2 = rs[c, 2] - rs[a, 2]
@@ -455,6 +493,8 @@ def aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tan
         kax, kgeo = aft_segment_stiffness(s, m_tail, stretched, tens, l0, ea, hdt2)
         if kax == 0.0 and kgeo == 0.0:
             continue
+        if not axial:
+            kax = 0.0
         # the pull on the aft point is along the segment, away from it
         sg = 1.0 if seg_up[s] == c else -1.0
         t0 = -sg * tang[s, 0]

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .jit import njit
-from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_CB, BP_REDUCED_DOF, BP_TAIL_MASS, COMPENSATOR,
+from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_AFT_TOW_POINT, BP_CB, BP_REDUCED_DOF, BP_TAIL_MASS, COMPENSATOR,
                      COMP_FORCE, COMP_PASSIVE, COMP_POSITION, CS_ACT, CS_CONTACT, CS_HITS, CS_PEN, C_CMD, C_MODE,
                      C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
                      FAIL_STRETCH, FREE, NEED_REMESH, N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS,
@@ -17,7 +17,7 @@ from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_CB, BP_REDUCED_DOF
                      S_RELATIVE_TOLERANCE, S_TOLERANCE, WS_LEN, WS_PAID, WS_V, W_LNOM, W_MODE, W_SEG)
 from .actuators import _compensator_node, _end_stop_force, _winch_speed
 from .body_dynamics import (_condense, _rotational_stiffness, _translational_damping, aft_rotational_stiffness,
-                            aft_segment_stiffness, body_loads, place_aft_nodes)
+                            aft_segment_stiffness, aft_transfer, body_loads, place_aft_nodes)
 from .cable_loads import current_at, node_assembly, node_reaction, segment_loads
 from .orbital_flow import _wave_flow
 from .rotations import (_chart_rotation, _inv3, euler_rates_to_omega, omega_dot_to_euler_acc,
@@ -49,6 +49,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     seg_lo, seg_up, seg_uplocal, node_kind = topo.seg_lo, topo.seg_up, topo.seg_uplocal, topo.node_kind
     node_nseg, node_segs, node_sgn, order, pos = topo.node_nseg, topo.node_segs, topo.node_sgn, topo.order, topo.pos
     body_node, body_aft_node = topo.body_node, topo.body_aft_node
+    # the tension tree: the lists above with aft tow points merged into their bodies' nodes (monolithic series
+    # coupling, system.tension_cliques; identical to them otherwise)
+    tn_nseg, tn_segs, tn_sgn, tseg_up, tseg_uplocal = topo.tn_nseg, topo.tn_segs, topo.tn_sgn, topo.tseg_up, topo.tseg_uplocal
     l0, diam, mu, cn, ct, can, cat, ea = segp.l0, segp.diam, segp.mu, segp.cn, segp.ct, segp.can, segp.cat, segp.ea
     bp, btab_n, btab, pb_mass, pb_vol = bodyp.bp, bodyp.btab_n, bodyp.btab, bodyp.pb_mass, bodyp.pb_vol
     pb_cda, pb_ca = bodyp.pb_cda, bodyp.pb_ca
@@ -73,6 +76,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     dang, omg, hvec, tmp3, tmp33, tmp33b, att = ws.dang, ws.omg, ws.hvec, ws.tmp3, ws.tmp33, ws.tmp33b, ws.att
     atr, arr, arrinv, cur_b, fb, mb, bdiag = ws.atr, ws.arr, ws.arrinv, ws.cur_b, ws.fb, ws.mb, ws.bdiag
     react, bkc, bdmat, scr, flow = ws.react, ws.bkc, ws.bdmat, ws.scr, ws.flow
+    gaft, haft, qaft = ws.gaft, ws.haft, ws.qaft
 
     nb = body_node.shape[0]
     r_t = hist_r[0]
@@ -87,9 +91,12 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
 
     # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
     any_aft = False
+    any_merged = False
     for b in range(nb):
         if body_aft_node[b] >= 0:
             any_aft = True
+            if tn_nseg[body_aft_node[b]] == 0:
+                any_merged = True
     status = FAIL_NEWTON
     elem = -1
     it = 0
@@ -101,30 +108,37 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                                    cn, ct, can, cat, ea, bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g,
                                    cur_z, cur_v, chart, rs, vs, angs, tang, stretched, drag, bmat, madd, mnode, bnode,
                                    fnode, tens, dang, blam, omg, tmp3, cur_b, fb, mb, bdiag, bkc, scr, tmp33, bdmat,
-                                   react, att, atr, arr, arrinv, hvec, tmp33b, bX, by)
+                                   react, att, atr, arr, arrinv, hvec, tmp33b, bX, by, tn_nseg, gaft, haft)
         if bad:
             return FAIL_NAN, it, -1, 0.0
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k
         a_bad = node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind,
                                  node_nseg, node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens,
-                                 mnode, bnode, fnode, acon, qvec, att, tmp33, tmp33b, hvec, tmp3)
+                                 mnode, bnode, fnode, acon, qvec, att, tmp33, tmp33b, hvec, tmp3, tn_nseg, tn_segs,
+                                 haft)
         if a_bad >= 0:
             return FAIL_NAN, it, a_bad, 0.0
+        if any_merged:
+            aft_point_influence(dt, planar, body_node, body_aft_node, tn_nseg, tn_segs, node_nseg, bp, blam, angs, bX,
+                                bkc, gaft, tang, qvec, qaft, tmp33, tmp33b)
         # --- positions at the current tensions, residuals, Newton update of the tensions
-        tmax = tension_system(seg_lo, seg_up, node_kind, node_nseg, node_segs, node_sgn, l0, ea, tang, qvec, acon,
-                              tens, rs, angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb)
+        tmax = tension_system(seg_lo, seg_up, tseg_up, node_kind, tn_nseg, tn_segs, tn_sgn, l0, ea, tang, qvec,
+                              acon, tens, rs, angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb,
+                              node_nseg, qaft)
         if as_published:
-            if not thesis_recursion_solve(order, seg_up, seg_uplocal, seg_lo, node_nseg, node_segs, kd, kb, rhs, dT,
+            if not thesis_recursion_solve(order, tseg_up, tseg_uplocal, seg_lo, tn_nseg, tn_segs, kd, kb, rhs, dT,
                                           gres, ws.recursion):
                 return FAIL_NEWTON, it, -1, 0.0
-        elif not tree_ldlt_solve(order, seg_up, seg_uplocal, node_kind, node_nseg, node_segs, pos, kd, kb, rhs, dT):
+        elif not tree_ldlt_solve(order, tseg_up, tseg_uplocal, node_kind, tn_nseg, tn_segs, pos, kd, kb, rhs, dT):
             return FAIL_NEWTON, it, -1, 0.0
-        elem, maxd, any_slack = tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, tens, rs)
+        elem, maxd, any_slack = tension_apply(node_kind, tn_nseg, tn_segs, tn_sgn, acon, qvec, dT, tens, rs)
         if not math.isfinite(maxd):
             return FAIL_NAN, it, elem, maxd
+        if any_merged:
+            aft_pull_on_rotation(body_aft_node, tn_nseg, node_nseg, node_segs, node_sgn, tang, tens, gaft, by)
         # --- body rotations: ω̇ = A_rr⁻¹(M − A_rt a), Houbolt on the Euler angles
         b_bad, dang_max = body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, omg, blam,
-                                            body_node, bp, bX, by, bkc, tmp3, hvec)
+                                            body_node, bp, bX, by, bkc, tmp3, hvec, body_aft_node, tn_nseg)
         if b_bad >= 0:
             return FAIL_ANGLE, it, b_bad, maxd
         if not math.isfinite(dang_max):
@@ -205,11 +219,15 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
                          node_nseg, node_segs, node_sgn, body_node, body_aft_node, l0, diam, mu, cn, ct, can, cat, ea,
                          bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g, cur_z, cur_v, chart, rs, vs, angs,
                          tang, stretched, drag, bmat, madd, mnode, bnode, fnode, tens, dang, blam, omg, tmp3, cur_b,
-                         fb, mb, bdiag, bkc, scr, tmp33, bdmat, react, att, atr, arr, arrinv, hvec, tmp33b, bX, by):
+                         fb, mb, bdiag, bkc, scr, tmp33, bdmat, react, att, atr, arr, arrinv, hvec, tmp33b, bX, by,
+                         tn_nseg, gaft, haft):
     """Loads and their linearisations at the current iterate ``rs`` (Newton iteration ``it``): node velocities
     (Houbolt, relative to the orbital flow), cable segment loads, node assembly, the rigid bodies' loads
     condensed onto their tow-point nodes (their rotational stiffness and damping on the first iteration), and
-    for series tows the tail's restoring moment. Returns True when a body's condensation failed (NaN)."""
+    for series tows the tail's restoring moment. With the monolithic series coupling (an aft node ``c`` with
+    ``tn_nseg[c] == 0``) the tail segments' pull is left out of the body's loads here — it enters the tension
+    solve through H_b and the rotation through G_b (``gaft``, ``haft``: :func:`aft_transfer`) — and only the aft
+    node's own loads and inertia are a load on the body. Returns True when a body's condensation failed (NaN)."""
     nn = rs.shape[0]
     nb = body_node.shape[0]
     i6dt = 1.0 / (6.0 * dt)
@@ -244,12 +262,34 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
                                   reduced)
             _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
         c = body_aft_node[b]
+        merged = c >= 0 and tn_nseg[c] == 0
+        if merged:
+            if it == 1:
+                # the tail's restoring moment at a fixed pull (its change with the stretch is in the Newton
+                # step: aft_point_influence)
+                aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tang, stretched, tens, l0,
+                                         ea, hdt2, bp[b, BP_TAIL_MASS], bkc, False)
+            # the condensation's implicit rotation: P = diag(½Δt² k + (11Δt/12) c), ω̇* of the iterate
+            iterate_omega_dot(dt, b, angs, hist_ang, dang, omg, scr[5], scr[4], tmp33b)
+            for i in range(3):
+                scr[4, i] = hdt2 * bkc[b, BK_STIFFNESS + i] + 11.0 * dt / 12.0 * bkc[b, BK_DAMPING + i]
+            aft_node_rotary_inertia(b, c, dt, lam, bp, mnode, bnode, scr[4])
         if c >= 0:
             node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
                           mnode, fnode, react)
+            if merged:
+                # monolithic series coupling: the tail segments' pull is solved with the tensions
+                for k in range(node_nseg[c]):
+                    sk = node_segs[c, k]
+                    for i in range(3):
+                        react[i] -= node_sgn[c, k] * tens[sk] * tang[sk, i]
         if not _condense(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
-                         tmp33b, bX[b], by[b], mnode, fnode, reduced):
+                         tmp33b, bX[b], by[b], mnode, fnode, reduced, merged, scr[4], scr[5]):
             return True
+        if merged:
+            aft_transfer(b, lam, atr, arrinv, bp, gaft[b], haft[b])
+            for i in range(3):
+                arr[i, i] -= scr[4, i]
         for i in range(3):
             bkc[b, BK_INERTIA + i] = arr[i, i]
         # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
@@ -264,19 +304,21 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
         # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
         for b in range(nb):
             c = body_aft_node[b]
-            if c >= 0:
+            if c >= 0 and tn_nseg[c] != 0:       # (relaxed coupling; the monolithic one did it above)
                 aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
-                                         stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc)
+                                         stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc, True)
     return False
 
 
 @njit(cache=True, _nrt=False)
 def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind, node_nseg,
                      node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens, mnode, bnode, fnode,
-                     acon, qvec, att, tmp33, tmp33b, hvec, tmp3):
+                     acon, qvec, att, tmp33, tmp33b, hvec, tmp3, tn_nseg, tn_segs, haft):
     """Every free node's position as a function of its segments' tensions, r_a = A_a + Σ σ T q_a,k (acon,
-    qvec), from the node's 3×3 system at the current iterate; the compensator's sheave node by its own law.
-    Returns the index of a node whose matrix is singular, or −1."""
+    qvec; over the node's list in the tension tree), from the node's 3×3 system at the current iterate; the
+    compensator's sheave node by its own law. A body's tow-point node with a merged aft tow point (monolithic
+    series coupling) also carries the tail segments: q = ½Δt² M̃⁻¹ H_b t. Returns the index of a node whose
+    matrix is singular, or −1."""
     nn = rs.shape[0]
     nb = body_node.shape[0]
     c11 = 11.0 * dt / 12.0
@@ -300,12 +342,35 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
                         kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
                 att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
                 tmp33[i, j] = mnode[a, i, j] + att[i, j]
-        # a body towing a tail from its aft tow point: the tail's pull is a load on the body inside the
-        # Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ +
-        # T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness)
+        # a body towing a tail from its aft tow point. Relaxed coupling: the tail's pull is a load on the body
+        # inside the Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ
+        # + T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness).
+        # Monolithic coupling: the pull is in the tension solve; the aft node's inertia, drag and string
+        # stiffness, which move with the tow point, enter both sides through H (the exact translational
+        # derivative of the load they put on the body, so again the rate only)
+        hb = -1
         for b in range(nb if any_aft else 0):
             c = body_aft_node[b]
             if body_node[b] != a or c < 0:
+                continue
+            if tn_nseg[c] == 0:
+                hb = b
+                for i in range(3):
+                    for j in range(3):
+                        tmp33b[i, j] = mnode[c, i, j] + c11 * bnode[c, i, j]
+                for k in range(node_nseg[c]):
+                    sk = node_segs[c, k]
+                    kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
+                    if kgeo == 0.0:
+                        continue
+                    for i in range(3):
+                        for j in range(3):
+                            tmp33b[i, j] += hdt2 * kgeo * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+                for i in range(3):
+                    for j in range(3):
+                        add = haft[b, i, 0] * tmp33b[0, j] + haft[b, i, 1] * tmp33b[1, j] + haft[b, i, 2] * tmp33b[2, j]
+                        att[i, j] += add
+                        tmp33[i, j] += add
                 continue
             for k in range(node_nseg[c]):
                 sk = node_segs[c, k]
@@ -329,11 +394,16 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
             tmp3[i] = hi + hdt2 * fnode[a, i]
         for i in range(3):
             acon[a, i] = tmp33b[i, 0] * tmp3[0] + tmp33b[i, 1] * tmp3[1] + tmp33b[i, 2] * tmp3[2]
-        for k in range(node_nseg[a]):
-            s = node_segs[a, k]
+        for k in range(tn_nseg[a]):
+            s = tn_segs[a, k]
+            if k < node_nseg[a]:
+                for i in range(3):
+                    hvec[i] = tang[s, i]
+            else:       # a tail segment of the merged aft tow point: its pull moves the node through H_b
+                for i in range(3):
+                    hvec[i] = haft[hb, i, 0] * tang[s, 0] + haft[hb, i, 1] * tang[s, 1] + haft[hb, i, 2] * tang[s, 2]
             for i in range(3):
-                qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * tang[s, 0] + tmp33b[i, 1] * tang[s, 1]
-                                        + tmp33b[i, 2] * tang[s, 2])
+                qvec[a, k, i] = hdt2 * (tmp33b[i, 0] * hvec[0] + tmp33b[i, 1] * hvec[1] + tmp33b[i, 2] * hvec[2])
     if planar:
         # vertical-plane model: free nodes hold their lateral coordinate. The scenes it accepts have no
         # x–y or y–z coupling in M̃ (no lateral tangent, velocity or body asymmetry), so the (x, z) rows
@@ -341,17 +411,21 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
         for a in range(nn):
             if node_kind[a] == FREE:
                 acon[a, 1] = r_t[a, 1]
-                for k in range(node_nseg[a]):
+                for k in range(tn_nseg[a]):
                     qvec[a, k, 1] = 0.0
     return -1
 
 
 @njit(cache=True, _nrt=False)
-def tension_system(seg_lo, seg_up, node_kind, node_nseg, node_segs, node_sgn, l0, ea, tang, qvec, acon, tens, rs,
-                   angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb):
+def tension_system(seg_lo, seg_up, tseg_up, node_kind, node_nseg, node_segs, node_sgn, l0, ea, tang, qvec, acon, tens,
+                   rs, angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb, own_nseg, qaft):
     """The Newton system of the segment tensions on the tree: positions at the current tensions, the length
     residuals g_s = ℓ_s − ℓ0_s (1 + T_s/EA_s) as the right-hand side, the tension matrix (kd, kb) with slack
-    segments held at T = 0. Returns the largest tension (for the relative tolerance)."""
+    segments held at T = 0. ``node_*`` and ``tseg_up`` are the tension tree's lists (aft tow points merged
+    under the monolithic series coupling); ``seg_up`` the cable's own upper nodes (where the length is
+    measured). Under the monolithic series coupling the rows of the tail segments hanging from a merged aft
+    point (slots ``own_nseg[a]`` and up of the body node's list) use ∂r_aft/∂T (``qaft``, the body's rotation
+    included) in place of the node's ∂r_a/∂T. Returns the largest tension (for the relative tolerance)."""
     ns = tens.shape[0]
     _positions_from_tensions(node_kind, node_nseg, node_segs, node_sgn, tens, acon, qvec, rs)
     place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
@@ -370,6 +444,21 @@ def tension_system(seg_lo, seg_up, node_kind, node_nseg, node_segs, node_sgn, l0
         if tens[s] > tmax:
             tmax = tens[s]
     assemble_tension_system(node_kind, node_nseg, node_segs, node_sgn, tang, qvec, l0, ea, tens, kd, kb)
+    for b in range(body_node.shape[0]):
+        c = body_aft_node[b]
+        if c < 0 or node_nseg[c] != 0:
+            continue
+        a = body_node[b]
+        for k1 in range(own_nseg[a], node_nseg[a]):
+            s1 = node_segs[a, k1]
+            for k2 in range(node_nseg[a]):
+                val = node_sgn[a, k1] * node_sgn[a, k2] * (tang[s1, 0] * qaft[b, k2, 0] + tang[s1, 1] * qaft[b, k2, 1]
+                                                           + tang[s1, 2] * qaft[b, k2, 2])
+                if k1 == k2:
+                    kd[s1] += val - node_sgn[a, k1] * node_sgn[a, k2] * (
+                        tang[s1, 0] * qvec[a, k2, 0] + tang[s1, 1] * qvec[a, k2, 1] + tang[s1, 2] * qvec[a, k2, 2])
+                else:
+                    kb[a, k1, k2] = val
     for s in range(ns):
         rhs[s] = gres[s]
         if tens[s] <= 0.0 and gres[s] < 0.0:
@@ -377,7 +466,7 @@ def tension_system(seg_lo, seg_up, node_kind, node_nseg, node_segs, node_sgn, l0
             kd[s] = 1.0
             rhs[s] = -tens[s]
             for e in range(2):
-                a = seg_lo[s] if e == 0 else seg_up[s]
+                a = seg_lo[s] if e == 0 else tseg_up[s]
                 for k in range(node_nseg[a]):
                     if node_segs[a, k] == s:
                         for k2 in range(node_nseg[a]):
@@ -411,8 +500,162 @@ def tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, ten
 
 
 @njit(cache=True, _nrt=False)
+def aft_node_rotary_inertia(b, c, dt, lam, bp, mnode, bnode, prot):
+    """Adds to ``prot`` (the implicit rotation of a body with a monolithically coupled tail) what the aft node's own
+    mass and drag damping (half the tail's top segment: they ride on the aft point) resist a rotation about each
+    body axis e_i with: uᵀ (M_c + (11Δt/12) B_c) u, u = Λᵀ (e_i × r_aft). These loads reach the body as the aft
+    node's reaction, evaluated at the iterate; without them in P the angle iteration of a light body whose aft
+    node is heavy or strongly damped (a long array towed fast) overshoots and diverges."""
+    c11 = 11.0 * dt / 12.0
+    r0 = bp[b, BP_AFT_TOW_POINT]
+    r1 = bp[b, BP_AFT_TOW_POINT + 1]
+    r2 = bp[b, BP_AFT_TOW_POINT + 2]
+    for i in range(3):
+        # e_i × r_aft in body axes
+        if i == 0:
+            v0, v1, v2 = 0.0, -r2, r1
+        elif i == 1:
+            v0, v1, v2 = r2, 0.0, -r0
+        else:
+            v0, v1, v2 = -r1, r0, 0.0
+        u0 = lam[0, 0] * v0 + lam[1, 0] * v1 + lam[2, 0] * v2
+        u1 = lam[0, 1] * v0 + lam[1, 1] * v1 + lam[2, 1] * v2
+        u2 = lam[0, 2] * v0 + lam[1, 2] * v1 + lam[2, 2] * v2
+        acc = 0.0
+        for j in range(3):
+            uj = u0 if j == 0 else (u1 if j == 1 else u2)
+            acc += uj * ((mnode[c, j, 0] + c11 * bnode[c, j, 0]) * u0 + (mnode[c, j, 1] + c11 * bnode[c, j, 1]) * u1
+                         + (mnode[c, j, 2] + c11 * bnode[c, j, 2]) * u2)
+        prot[i] += acc
+
+
+@njit(cache=True, _nrt=False)
+def iterate_omega_dot(dt, b, angs, hist_ang, dang, omg, out, zero, w):
+    """The body angular acceleration ω̇* = W θ̈* + Ẇ θ̇ of the iterate's Euler angles (Houbolt θ̈*), into
+    ``out``; ``zero``: (3,) scratch, ``w``: (3, 3) scratch."""
+    idt2 = 1.0 / (dt * dt)
+    for i in range(3):
+        zero[i] = 0.0
+    # θ̈ = W⁻¹ ω̇ + e(θ, θ̇, ω): e from ω̇ = 0
+    omega_dot_to_euler_acc(angs[b], dang[b], omg[b], zero, out)
+    cb = math.cos(angs[b, 0])
+    sb = math.sin(angs[b, 0])
+    ca = math.cos(angs[b, 1])
+    sa = math.sin(angs[b, 1])
+    for i in range(3):
+        w[0, i] = (2.0 * angs[b, i] - 5.0 * hist_ang[0, b, i] + 4.0 * hist_ang[1, b, i] - hist_ang[2, b, i]) * idt2 \
+            - out[i]
+    e0 = w[0, 0]
+    e1 = w[0, 1]
+    e2 = w[0, 2]
+    out[0] = e0 - sa * e2
+    out[1] = cb * e1 + ca * sb * e2
+    out[2] = -sb * e1 + ca * cb * e2
+
+
+@njit(cache=True, _nrt=False)
+def aft_point_influence(dt, planar, body_node, body_aft_node, tn_nseg, tn_segs, own_nseg, bp, blam, angs, bX,
+                        bkc, gaft, tang, qvec, qaft, w, m):
+    """Monolithic series coupling: ∂r_c/∂T_k (per unit σ_k T_k, like ``qvec``) of each merged aft tow point c for
+    the tensions of its body node's tension-tree list (``qaft[b, k]``), the body's rotation within the iteration
+    included, so that the tension
+    solve and the body-angle update form one Newton step for a light body whose pitch the tail drives.
+
+    r_c = r_a + Λᵀ r_aft: ∂r_a/∂T_k = q_k (``qvec``); the angle update moves the body by the small rotation
+    δφ = W D W⁻¹ ½Δt² δω̇ (body axes; W the Euler-rate map, D = diag(1/relaxation factor) of
+    :func:`body_angle_update`: 1 for these bodies, zero for held roll/yaw), with δω̇ = G σ t_k (a tail segment's pull, G =
+    ``gaft``) − X Λ (2/Δt²) q_k (the tow point's acceleration), and the aft point by Λᵀ (δφ × r_aft). A
+    linearisation in the Jacobian only: the residuals are evaluated at the iterate, so the converged solution
+    does not depend on it. ``w``, ``m``: (3, 3) scratch."""
+    hdt2 = 0.5 * dt * dt
+    c11 = 11.0 * dt / 12.0
+    i2 = 2.0 / (dt * dt)
+    for b in range(body_node.shape[0]):
+        c = body_aft_node[b]
+        if c < 0 or tn_nseg[c] != 0:
+            continue
+        a = body_node[b]
+        lam = blam[b]
+        reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
+        # W (ω = W θ̇) and its inverse
+        cb = math.cos(angs[b, 0])
+        sb = math.sin(angs[b, 0])
+        ca = math.cos(angs[b, 1])
+        sa = math.sin(angs[b, 1])
+        w[0, 0] = 1.0
+        w[0, 1] = 0.0
+        w[0, 2] = -sa
+        w[1, 0] = 0.0
+        w[1, 1] = cb
+        w[1, 2] = ca * sb
+        w[2, 0] = 0.0
+        w[2, 1] = -sb
+        w[2, 2] = ca * cb
+        if not _inv3(w, m):
+            continue            # at the chart's singularity: keep the translational coupling only
+        # m ← D W⁻¹ (rows scaled), then w ← W D W⁻¹ · ½Δt²
+        for i in range(3):
+            # the angle update of a merged body is not relaxed (its rotational stiffness is inside the
+            # condensation): D = 1, except held roll/yaw
+            d = 0.0 if reduced and i != 1 else 1.0
+            for j in range(3):
+                m[i, j] *= d
+        for i in range(3):
+            r0 = w[i, 0]
+            r1 = w[i, 1]
+            r2 = w[i, 2]
+            for j in range(3):
+                w[i, j] = hdt2 * (r0 * m[0, j] + r1 * m[1, j] + r2 * m[2, j])
+        rx = bp[b, BP_AFT_TOW_POINT]
+        ry = bp[b, BP_AFT_TOW_POINT + 1]
+        rz = bp[b, BP_AFT_TOW_POINT + 2]
+        for k in range(tn_nseg[a]):
+            s = tn_segs[a, k]
+            # δω̇ (body axes) per unit T_k
+            for i in range(3):
+                acc = 0.0
+                for j in range(3):
+                    lq = lam[j, 0] * qvec[a, k, 0] + lam[j, 1] * qvec[a, k, 1] + lam[j, 2] * qvec[a, k, 2]
+                    acc -= bX[b, i, j] * i2 * lq
+                if k >= own_nseg[a]:      # (like qvec, per unit σ_k T_k: the sign is applied in the tension system)
+                    acc += gaft[b, i, 0] * tang[s, 0] + gaft[b, i, 1] * tang[s, 1] + gaft[b, i, 2] * tang[s, 2]
+                m[0, i] = acc
+            # δφ = w δω̇, δr_c = Λᵀ (δφ × r_aft)
+            p0 = w[0, 0] * m[0, 0] + w[0, 1] * m[0, 1] + w[0, 2] * m[0, 2]
+            p1 = w[1, 0] * m[0, 0] + w[1, 1] * m[0, 1] + w[1, 2] * m[0, 2]
+            p2 = w[2, 0] * m[0, 0] + w[2, 1] * m[0, 1] + w[2, 2] * m[0, 2]
+            u0 = p1 * rz - p2 * ry
+            u1 = p2 * rx - p0 * rz
+            u2 = p0 * ry - p1 * rx
+            for i in range(3):
+                qaft[b, k, i] = qvec[a, k, i] + lam[0, i] * u0 + lam[1, i] * u1 + lam[2, i] * u2
+
+
+@njit(cache=True, _nrt=False)
+def aft_pull_on_rotation(body_aft_node, tn_nseg, node_nseg, node_segs, node_sgn, tang, tens, gaft, by):
+    """Monolithic series coupling: the tail segments' pull at the new tensions, f = Σ σ T t over the aft node's
+    segments, added to the body's angular acceleration term, y_b += G_b f (its moment about the tow point;
+    the condensation left it out of ``by``)."""
+    for b in range(body_aft_node.shape[0]):
+        c = body_aft_node[b]
+        if c < 0 or tn_nseg[c] != 0:
+            continue
+        f0 = 0.0
+        f1 = 0.0
+        f2 = 0.0
+        for k in range(node_nseg[c]):
+            s = node_segs[c, k]
+            w = node_sgn[c, k] * tens[s]
+            f0 += w * tang[s, 0]
+            f1 += w * tang[s, 1]
+            f2 += w * tang[s, 2]
+        for i in range(3):
+            by[b, i] += gaft[b, i, 0] * f0 + gaft[b, i, 1] * f1 + gaft[b, i, 2] * f2
+
+
+@njit(cache=True, _nrt=False)
 def body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, omg, blam, body_node, bp, bX, by, bkc,
-                      tmp3, hvec):
+                      tmp3, hvec, body_aft_node, tn_nseg):
     """Body rotations at the new node positions: ω̇ = A_rr⁻¹(M − A_rt a) from the condensed body equations,
     Houbolt on the Euler angles, relaxed by the implicit diagonal rotational stiffness and damping. Returns (a
     body past the chart's pitch limit or −1, the largest angle change)."""
@@ -432,15 +675,18 @@ def body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, o
             tmp3[i] = by[b, i] - (bX[b, i, 0] * hvec[0] + bX[b, i, 1] * hvec[1] + bX[b, i, 2] * hvec[2])
         omega_dot_to_euler_acc(angs[b], dang[b], omg[b], tmp3, hvec)
         reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
+        merged = body_aft_node[b] >= 0 and tn_nseg[body_aft_node[b]] == 0
         for i in range(3):
             if reduced and i != 1:
                 angs[b, i] = hist_ang[0, b, i]      # roll and yaw held
                 continue
             na = 2.5 * hist_ang[0, b, i] - 2.0 * hist_ang[1, b, i] + 0.5 * hist_ang[2, b, i] + hdt2 * hvec[i]
             # implicit (diagonal) treatment of the rotational stiffness and damping: a relaxation
-            # of the fixed-point update that leaves the converged solution unchanged
-            na = angs[b, i] + (na - angs[b, i]) / (
-                1.0 + (hdt2 * bkc[b, BK_STIFFNESS + i] + c11 * bkc[b, BK_DAMPING + i]) / bkc[b, BK_INERTIA + i])
+            # of the fixed-point update that leaves the converged solution unchanged (inside the
+            # condensation for a body with a monolithically coupled tail: iterate_coefficients)
+            if not merged:
+                na = angs[b, i] + (na - angs[b, i]) / (
+                    1.0 + (hdt2 * bkc[b, BK_STIFFNESS + i] + c11 * bkc[b, BK_DAMPING + i]) / bkc[b, BK_INERTIA + i])
             dd = abs(na - angs[b, i])
             if not (dd <= dang_max):
                 dang_max = dd

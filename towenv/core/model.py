@@ -41,6 +41,13 @@ class Topology(NamedTuple):
     pos: np.ndarray             # int64: position of each node in ``order``
     body_node: np.ndarray       # int64 (nb,): tow-point node of each rigid body
     body_aft_node: np.ndarray   # int64 (nb,): aft tow-point node (series tows), -1 if none
+    # the tension tree (system.tension_cliques): the lists above with each aft tow point merged into its body's
+    # tow-point node (solver.series_coupling = "monolithic"; identical to them otherwise)
+    tn_nseg: np.ndarray         # int64 (nn,)
+    tn_segs: np.ndarray         # int64 (nn, MAX_SEGS_PER_NODE)
+    tn_sgn: np.ndarray          # float64 (nn, MAX_SEGS_PER_NODE)
+    tseg_up: np.ndarray         # int64 (ns,): upper node of each segment in the tension tree
+    tseg_uplocal: np.ndarray    # int64 (ns,): its slot there
 
 
 class Segments(NamedTuple):
@@ -149,6 +156,9 @@ class HouboltWork(NamedTuple):
     scr: np.ndarray             # (6, 3) scratch
     flow: np.ndarray            # (nn, 3) wave orbital velocity at the nodes
     recursion: np.ndarray       # (6, ns) scratch of the as-published tension recursion
+    gaft: np.ndarray            # (nb, 3, 3) monolithic series coupling: ω̇ += G f for a global force f at the aft point
+    haft: np.ndarray            # (nb, 3, 3) ... and the tow-point node's force += H f (body_dynamics.aft_transfer)
+    qaft: np.ndarray            # (nb, k, 3) ... ∂r_aft/∂T of the tow-point node's tension-tree list (rotation included)
 
     @staticmethod
     def allocate(nn: int, ns: int, nb: int) -> "HouboltWork":
@@ -159,7 +169,8 @@ class HouboltWork(NamedTuple):
             z(ns), z((nn, mk, mk)), z(ns), z(ns), z(ns), z(ns),
             z((nb, 3, 3)), z((nb, 3)), z((nb, 3, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)),
             z(3), z(3), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)),
-            z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)), z((6, ns)))
+            z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)), z((6, ns)),
+            z((nb1, 3, 3)), z((nb1, 3, 3)), z((nb1, mk, 3)))
 
 
 class ExplicitWork(NamedTuple):

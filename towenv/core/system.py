@@ -84,6 +84,17 @@ class System:
     bodies: list[BodyMap] = field(default_factory=list)
     anchors: dict = field(default_factory=dict)          # node -> fixed position
     comp_node: int = -1                                   # heave-compensator sheave node, -1 if none
+    # series tows (a body towing a tail from its aft tow point): "monolithic" solves the tail's top segments in
+    # the body's tow-point clique of the tension tree (their pull acts on the body inside the tension solve),
+    # "relaxed" treats that pull as a load inside the Newton loop (block Gauss–Seidel, relaxed). Scene field
+    # solver.series_coupling; see tension_cliques
+    series_coupling: str = "monolithic"
+
+    def __post_init__(self):
+        (self.tn_nseg, self.tn_segs, self.tn_sgn, self.tseg_up,
+         self.tseg_uplocal) = tension_cliques(self.node_nseg, self.node_segs, self.node_sgn, self.seg_up,
+                                              self.seg_uplocal, self.body_node, self.body_aft_node,
+                                              self.series_coupling == "monolithic")
 
     @property
     def cable_top_node(self) -> int:
@@ -104,7 +115,8 @@ class System:
 
     def topo(self) -> Topology:
         return Topology(self.seg_lo, self.seg_up, self.seg_uplocal, self.node_kind, self.node_nseg, self.node_segs,
-                self.node_sgn, self.order, self.pos, self.body_node, self.body_aft_node)
+                        self.node_sgn, self.order, self.pos, self.body_node, self.body_aft_node, self.tn_nseg,
+                        self.tn_segs, self.tn_sgn, self.tseg_up, self.tseg_uplocal)
 
     def segp(self) -> Segments:
         return Segments(self.l0, self.diam, self.mu, self.cn, self.ct, self.can, self.cat, self.ea)
@@ -359,7 +371,7 @@ def build_system(scene) -> System:
                   pb_mass=pb_mass, pb_vol=pb_vol, pb_cda=pb_cda, pb_ca=pb_ca,
                   rho=rho, g=g, cur_z=cur_z, cur_v=cur_v,
                   lines=[line_maps[_get(ln, "name")] for ln in lines], bodies=body_maps, anchors=anchors,
-                  comp_node=comp_node)
+                  comp_node=comp_node, series_coupling=_series_coupling(scene))
     tail_masses(system)
     return system
 
@@ -486,6 +498,51 @@ def _tables(b):
             out[4 * j + k, :m] = tab[k]
         n[j] = m
     return out, n
+
+
+def _series_coupling(scene) -> str:
+    return str(_get(_get(scene, "solver"), "series_coupling"))
+
+
+def tension_cliques(node_nseg, node_segs, node_sgn, seg_up, seg_uplocal, body_node, body_aft, merge: bool):
+    """The node lists of the tension tree (``tn_nseg``, ``tn_segs``, ``tn_sgn``) and each segment's upper node
+    and slot in it there (``tseg_up``, ``tseg_uplocal``).
+
+    Without series tows, or with ``merge`` False (solver.series_coupling = "relaxed"), they are the cable
+    topology's own lists. With ``merge`` (the default, "monolithic"), an aft tow point ``c`` of body ``b`` is
+    merged into the body's tow-point node ``a``: the segments hanging from ``c`` join ``a``'s list (after
+    ``a``'s own), ``c``'s list is emptied, and their upper node becomes ``a``. The aft point is rigidly
+    carried by the body (r_c = r_a + Λᵀ r_aft), so a tail segment's length depends on the tensions through
+    the body's tow-point position exactly as a segment at ``a`` would, and its pull moves ``a`` through the
+    condensed body (``houbolt.node_local_solve``, transfer matrix H_b). The tree stays a tree: the tail hangs
+    from ``a``, and the elimination order (children before parents, ``c``'s parent is ``a``) is unchanged."""
+    tn_nseg = node_nseg.copy()
+    tn_segs = node_segs.copy()
+    tn_sgn = node_sgn.copy()
+    tseg_up = np.array(seg_up, np.int64).copy()
+    tseg_uplocal = seg_uplocal.copy()
+    if not merge:
+        return tn_nseg, tn_segs, tn_sgn, tseg_up, tseg_uplocal
+    for b in range(len(body_node)):
+        c = int(body_aft[b])
+        if c < 0:
+            continue
+        a = int(body_node[b])
+        for k in range(int(node_nseg[c])):
+            s = int(node_segs[c, k])
+            j = int(tn_nseg[a])
+            if j >= node_segs.shape[1]:
+                raise ValueError(f"more than {node_segs.shape[1]} segments meet at a body's tow point and its aft "
+                                 "tow point together (solver.series_coupling = \"monolithic\"); use \"relaxed\"")
+            tn_segs[a, j] = s
+            tn_sgn[a, j] = node_sgn[c, k]
+            tseg_up[s] = a
+            tseg_uplocal[s] = j
+            tn_nseg[a] += 1
+        tn_nseg[c] = 0
+        tn_segs[c, :] = -1
+        tn_sgn[c, :] = 0.0
+    return tn_nseg, tn_segs, tn_sgn, tseg_up, tseg_uplocal
 
 
 def topology_arrays(nn, seg_lo, seg_up, extra_parent, top_node):
@@ -644,7 +701,7 @@ def remesh_top(sysm: "System", line: str, insert: bool, l_nom: float):
                  pb_mass=per_node(sysm.pb_mass), pb_vol=per_node(sysm.pb_vol), pb_cda=per_node(sysm.pb_cda),
                  pb_ca=per_node(sysm.pb_ca), rho=sysm.rho, g=sysm.g, cur_z=sysm.cur_z, cur_v=sysm.cur_v,
                  lines=lines, bodies=bodies, anchors={nn_(k): v for k, v in sysm.anchors.items()},
-                 comp_node=comp_node)
+                 comp_node=comp_node, series_coupling=sysm.series_coupling)
     new.bp = sysm.bp.copy()
     tail_masses(new)
     return new, np.asarray(node_map), np.asarray(seg_map), info

@@ -690,6 +690,9 @@ class Solver(_Model):
     settle_time: Num(ge=0, le=3600, unit="s") = 0.0
     planar: bool = False        # 2-D vertical-plane model: lateral node motion, body roll and yaw frozen
     newton_stop: _choice("change", "estimate") = "change"
+    # series tows: the tail's top segments in the body's clique of the tension solve ("monolithic"), or its pull
+    # as a relaxed load inside the Newton loop ("relaxed", the coupling before 2026-12; docs/model-notes.md)
+    series_coupling: _choice("monolithic", "relaxed") = "monolithic"
 
 
 class Sea(_Model):

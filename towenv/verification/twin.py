@@ -397,7 +397,7 @@ def constraint_gradient(sys, tang, free_only=True):
     return sp.csr_matrix((vals, (rows, cols)), shape=(ns, 3 * nn))
 
 
-def tension_matrix_np(sys, tang, minv, dt):
+def tension_matrix_np(sys, tang, minv, dt, merged=()):
     """K = −J (CSR) of the unsquared length constraints g_s = ℓ_s − l_s(1 + T_s/EA_s) (model.md 5.3–5.6).
 
     From the general rule J[i, s] = −Σ_a σ_{a,i} σ_{a,s} t_i·(½Δt² M̃_a⁻¹ t_s) − δ_is l_i/EA_i over the
@@ -408,11 +408,27 @@ def tension_matrix_np(sys, tang, minv, dt):
     hydrodynamic damping) gives the corresponding non-symmetric K.
     """
     nn = sys.node_kind.shape[0]
+    ns = sys.l0.shape[0]
     C = constraint_gradient(sys, tang)
+    Cf = C
+    if len(merged):
+        # monolithic series coupling: a segment s hanging from the aft point c of a body at node a has
+        # ∂r_c/∂T = ∂r_a/∂T (row: σ t_s in a's columns) and pulls a through the condensed body (column: H σ t_s)
+        rows, cols, vr, vf = [], [], [], []
+        for a, c, H in merged:
+            for k in range(sys.node_nseg[c]):
+                s = sys.node_segs[c, k]
+                st = sys.node_sgn[c, k] * tang[s]
+                rows += [s] * 3
+                cols += [3 * a + i for i in range(3)]
+                vr += list(st)
+                vf += list(H @ st)
+        C = C + sp.csr_matrix((vr, (rows, cols)), shape=(ns, 3 * nn))
+        Cf = Cf + sp.csr_matrix((vf, (rows, cols)), shape=(ns, 3 * nn))
     Minv = sp.block_diag([sp.csr_matrix(minv[a]) for a in range(nn)], format="csr")
     ea = sys.ea
     compliance = np.where(np.isinf(ea), 0.0, sys.l0 / np.where(np.isinf(ea), 1.0, ea))
-    K = 0.5 * dt * dt * (C @ Minv @ C.T) + sp.diags(compliance)
+    K = 0.5 * dt * dt * (C @ Minv @ Cf.T) + sp.diags(compliance)
     return sp.csr_matrix(K)
 
 
@@ -525,11 +541,16 @@ def houbolt_vel(r_new, hist, dt):
 
 def node_reaction_np(sys, c, r_new, hist_r, dt, tang, tens, mnode, fnode):
     """Force of the cable system on the support of prescribed node c: Σσ T t + F_o − M r̈ (model.md 2.6)."""
-    f = fnode[c].copy()
+    return node_tension_np(sys, c, tang, tens) + fnode[c] - mnode[c] @ houbolt_acc(r_new[c], hist_r[:, c], dt)
+
+
+def node_tension_np(sys, c, tang, tens):
+    """Σ_{s at c} σ_{c,s} T_s t_s: the segments' pull on node c (its own list in the cable topology)."""
+    f = np.zeros(3)
     for k in range(sys.node_nseg[c]):
         s = sys.node_segs[c, k]
         f += sys.node_sgn[c, k] * tens[s] * tang[s]
-    return f - mnode[c] @ houbolt_acc(r_new[c], hist_r[:, c], dt)
+    return f
 
 
 def geometric_stiffness_np(sys, seg: SegmentLoads, tens):
@@ -589,7 +610,7 @@ def aft_segment_stiffness_np(sys, s, m_tail, stretched, tens, dt):
     return (1.0 / comp if comp > 0.0 else 0.0), tens[s] / stretched[s]
 
 
-def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt):
+def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt, axial=True):
     """Relaxation of the body–tail (series tow) coupling for body ``b``: the translational stiffness
     Σ k_ax t tᵀ + T/ℓ (𝟙 − t tᵀ) (3×3, added to the body node's ½Δt²-scaled linearisation) and the
     rotational stiffness about the body axes e_i, K_i = Σ max(0, T (d·t − (e·d)(e·t)) + k_ax (t·u)²
@@ -607,6 +628,7 @@ def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt):
         kax, kgeo = aft_segment_stiffness_np(sys, s, sys.bp[b, BP_TAIL_MASS], seg.stretched, tens, dt)
         if kax == 0.0 and kgeo == 0.0:
             continue
+        kax = kax if axial else 0.0     # monolithic coupling: the pull's change with the stretch is in the Newton step
         tt = np.outer(seg.tang[s], seg.tang[s])
         kt += kax * tt + kgeo * (_I3 - tt)
         t = -(1.0 if sys.seg_up[s] == c else -1.0) * seg.tang[s]
@@ -617,6 +639,46 @@ def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt):
             kk = tens[s] * (d @ t - (e @ d) * (e @ t)) + kax * tu * tu + kgeo * (u @ u - tu * tu)
             kr[i] += max(kk, 0.0)
     return kt, kr
+
+
+def aft_rotation_rows_np(sys, merged, body, relax, reduced, angs, tang, minv, dt):
+    """Monolithic series coupling: the correction of the tension matrix's rows for the segments hanging from a
+    merged aft tow point c (sparse, S × S): their length depends on the tensions through r_c = r_a + Λᵀ r_aft,
+    r_a moving as the node-local solve says and the body turning within the iteration as the relaxed
+    angle update says — δφ = W D W⁻¹ ½Δt² δω̇ (body axes; D = 1/relaxation factor, 0 for held roll/yaw),
+    δω̇ = G δf_c − X Λ (2/Δt²) δr_a, δr_c = δr_a + Λᵀ(δφ × r_aft). K's rows as assembled hold σ t·∂r_a/∂T;
+    this adds σ t·(∂r_c/∂T − ∂r_a/∂T) (kernels: ``houbolt.aft_point_influence``, ``tension_system``)."""
+    ns = sys.l0.shape[0]
+    hdt2 = 0.5 * dt * dt
+    c11 = 11.0 * dt / 12.0
+    rows, cols, vals = [], [], []
+    for b in np.nonzero(merged)[0]:
+        a, c = int(sys.body_node[b]), int(sys.body_aft_node[b])
+        lam, _, _, X, _, arr_diag, G, H = body[b]
+        # ∂r_a/∂T (3 × S): the node's own segments directly, the tail's through H
+        dra = np.zeros((3, ns))
+        for k in range(sys.node_nseg[a]):
+            s = sys.node_segs[a, k]
+            dra[:, s] += hdt2 * minv[a] @ (sys.node_sgn[a, k] * tang[s])
+        df = np.zeros((3, ns))          # ∂f_c/∂T, the tail's pull (global)
+        for k in range(sys.node_nseg[c]):
+            s = sys.node_segs[c, k]
+            df[:, s] = sys.node_sgn[c, k] * tang[s]
+            dra[:, s] += hdt2 * minv[a] @ (H @ df[:, s])
+        d = np.ones(3)                  # the angle update of these bodies is not relaxed
+        if reduced[b]:
+            d[[0, 2]] = 0.0
+        W = _euler_rate_matrix(angs[b])
+        dphi = hdt2 * W @ np.diag(d) @ np.linalg.inv(W) @ (G @ df - X @ lam @ dra * (2.0 / (dt * dt)))
+        drc_minus_dra = -lam.T @ _skew(sys.bp[b, BP_AFT_TOW_POINT:BP_AFT_TOW_POINT + 3]) @ dphi
+        cols_b = np.nonzero(np.any(dra != 0.0, axis=0) | np.any(df != 0.0, axis=0))[0]
+        for k in range(sys.node_nseg[c]):
+            s1 = sys.node_segs[c, k]
+            row = sys.node_sgn[c, k] * tang[s1] @ drc_minus_dra
+            rows += [s1] * cols_b.size
+            cols += list(cols_b)
+            vals += list(row[cols_b])
+    return sp.csr_matrix((vals, (rows, cols)), shape=(ns, ns))
 
 
 def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
@@ -675,6 +737,10 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     # reduced models: vertical plane (settings[8]) and pitch-only bodies (bp[:, BP_REDUCED_DOF])
     planar = settings.shape[0] > S_PLANAR and settings[S_PLANAR] != 0.0
     reduced = planar | (sys.bp[:, BP_REDUCED_DOF] != 0.0) if sys.bp.shape[0] else np.zeros(0, bool)
+    # series tows coupled monolithically (solver.series_coupling, system.tension_cliques): the aft tow point's
+    # segments pull the body inside the tension solve
+    merged = np.array([c >= 0 and getattr(sys, "series_coupling", "relaxed") == "monolithic"
+                       for c in sys.body_aft_node], bool)
 
     def fail(status, it, elem, maxd):
         return TwinStep(sys, sim_like.settings, hist_r, hist_ang, tens_hist, old_react, status, it, elem, maxd,
@@ -727,34 +793,65 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
                     bdamp[b][:, 1] = 0.0                 # no lateral velocity
             c = sys.body_aft_node[b]
             if c >= 0:
-                tail = lam @ node_reaction_np(sys, c, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
+                tail = node_reaction_np(sys, c, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
+                if merged[b]:
+                    # monolithic series coupling: the tail's pull enters the tension solve (H_b below); only
+                    # the aft node's own loads and inertia are a load on the body here
+                    tail = tail - node_tension_np(sys, c, seg.tang, tens)
+                tail = lam @ tail
                 F = F + tail
                 M = M + np.cross(P["r_aft"], tail)
             A_tt, A_tr, A_rr = body_mass_blocks_np(sys, b)
             F = F - P["mass"] * np.cross(w, np.cross(w, P["r_G"]))
             M = M - np.cross(w, A_rr @ w)          # rigid + added rotational inertia (kernels.condense_body)
+            arr_diag = np.diag(A_rr).copy()
+            if merged[b]:
+                # monolithic series coupling: the rotational stiffness/damping estimates inside the condensation,
+                # (A_rr + P) ω̇ = M − A_rt a + P ω̇*, P = diag(½Δt² k + (11Δt/12) c), ω̇* of the iterate
+                if it == 1:
+                    _, kr = aft_relaxation_np(sys, b, rs, lam, seg, tens, dt, axial=False)
+                    relax[b, :3] += kr
+                prot = hdt2 * relax[b, :3] + c11 * relax[b, 3:]
+                # the aft node's mass and drag damping ride on the aft point: uᵀ(M_c + (11Δt/12) B_c)u, u = Λᵀ(e_i × r_aft)
+                for i in range(3):
+                    u = lam.T @ np.cross(_I3[i], P["r_aft"])
+                    prot[i] += u @ (mnode[c] + c11 * bnode[c]) @ u
+                Wm = _euler_rate_matrix(angs[b])
+                e0 = omega_dot_to_euler_acc_np(angs[b], dang, w, np.zeros(3))
+                wdot = Wm @ (houbolt_acc(angs[b], hist_ang[:, b], dt) - e0)
+                A_rr = A_rr + np.diag(prot)
+                M = M + prot * wdot
             if reduced[b]:
                 # pitch only: roll and yaw held by constraint moments, A_rr⁻¹ → e_y e_yᵀ / A_rr,yy
                 e_y = np.array([0.0, 1.0, 0.0])
-                X = np.outer(e_y, A_tr.T[1]) / A_rr[1, 1]
-                y = e_y * M[1] / A_rr[1, 1]
+                A_rr_inv = np.outer(e_y, e_y) / A_rr[1, 1]
             else:
-                X = np.linalg.solve(A_rr, A_tr.T)
-                y = np.linalg.solve(A_rr, M)
+                A_rr_inv = np.linalg.inv(A_rr)
+            X = A_rr_inv @ A_tr.T
+            y = A_rr_inv @ M
             A_eff = A_tt - A_tr @ X
             f_eff = F - A_tr @ y
             mnode[a] += lam.T @ A_eff @ lam
             fnode[a] += lam.T @ f_eff
             bnode[a] += lam.T @ bdamp[b] @ lam
-            body.append((lam, dang, w, X, y, np.diag(A_rr).copy()))
+            # a global force f at the aft point: ω̇ += G f, node force += H f (the condensed body)
+            G = A_rr_inv @ _skew(P["r_aft"]) @ lam
+            H = _I3 - lam.T @ A_tr @ G
+            body.append((lam, dang, w, X, y, arr_diag, G, H))
         # 2. node-local affine map r(T)
         lin = c11 * bnode + hdt2 * geometric_stiffness_np(sys, seg, tens)
         for b in range(nb):
-            if sys.body_aft_node[b] >= 0:      # series tow: relax the body–tail coupling (rate only)
-                kt, kr = aft_relaxation_np(sys, b, rs, body[b][0], seg, tens, dt)
-                lin[sys.body_node[b]] += hdt2 * kt
-                if it == 1:
-                    relax[b, :3] += kr
+            c = sys.body_aft_node[b]
+            if c >= 0:      # series tow: relax the body–tail coupling (rate only)
+                kt, kr = aft_relaxation_np(sys, b, rs, body[b][0], seg, tens, dt, axial=not merged[b])
+                if merged[b]:
+                    # the aft node's inertia, drag and string stiffness move with the tow point: their
+                    # derivatives through H (exact translational Jacobian of the aft point's loads)
+                    lin[sys.body_node[b]] += body[b][7] @ (mnode[c] + c11 * bnode[c] + hdt2 * kt)
+                else:
+                    lin[sys.body_node[b]] += hdt2 * kt
+                    if it == 1:
+                        relax[b, :3] += kr
         Mt = mnode + lin
         minv = np.zeros_like(Mt)
         minv[free] = np.linalg.inv(Mt[free])
@@ -767,9 +864,15 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         if planar:
             acon[free, 1] = hist_r[0][free, 1]
 
+        def pull(T):
+            f = tension_force_np(sys, seg.tang, T)
+            for b in np.nonzero(merged)[0]:
+                f[sys.body_node[b]] += body[b][7] @ node_tension_np(sys, sys.body_aft_node[b], seg.tang, T)
+            return f
+
         def positions(T):
             out = rs.copy()
-            x = acon + hdt2 * np.einsum("aij,aj->ai", minv, tension_force_np(sys, seg.tang, T))
+            x = acon + hdt2 * np.einsum("aij,aj->ai", minv, pull(T))
             out[free] = x[free]
             return out
 
@@ -778,7 +881,10 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         ell = np.linalg.norm(rs[sys.seg_up] - rs[sys.seg_lo], axis=1)
         gres = ell - sys.l0 - compliance * tens
         tmax = max(float(tens.max(initial=0.0)), 0.0)
-        K = tension_matrix_np(sys, seg.tang, minv, dt)
+        K = tension_matrix_np(sys, seg.tang, minv, dt, [(sys.body_node[b], sys.body_aft_node[b], body[b][7])
+                                                        for b in np.nonzero(merged)[0]])
+        if np.any(merged):
+            K = K + aft_rotation_rows_np(sys, merged, body, relax, reduced, angs, seg.tang, minv, dt)
         slack = (tens <= 0.0) & (gres < 0.0)
         keep = sp.diags((~slack).astype(float))
         K = keep @ K @ keep + sp.diags(slack.astype(float))
@@ -801,13 +907,16 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         new_angs = angs.copy()
         for b in range(nb):
             a = sys.body_node[b]
-            lam, dang, w, X, y, arr_diag = body[b]
+            lam, dang, w, X, y, arr_diag, G, _ = body[b]
+            if merged[b]:
+                y = y + G @ node_tension_np(sys, sys.body_aft_node[b], seg.tang, tens)    # at the new tensions
             a_body = lam @ houbolt_acc(rs[a], hist_r[:, a], dt)
             domega = y - X @ a_body
             eacc = omega_dot_to_euler_acc_np(angs[b], dang, w, domega)
             plain = a_hist_term[b] + hdt2 * eacc
-            # relaxed fixed-point update (diagonal implicit rotational stiffness and damping)
-            factor = 1.0 + (hdt2 * relax[b, :3] + c11 * relax[b, 3:]) / arr_diag
+            # relaxed fixed-point update (diagonal implicit rotational stiffness and damping; inside the
+            # condensation for a body with a monolithically coupled tail)
+            factor = 1.0 if merged[b] else 1.0 + (hdt2 * relax[b, :3] + c11 * relax[b, 3:]) / arr_diag
             new_angs[b] = angs[b] + (plain - angs[b]) / factor
             if reduced[b]:
                 new_angs[b, [0, 2]] = hist_ang[0, b, [0, 2]]      # roll and yaw held
