@@ -5,7 +5,6 @@ iterations per step, step cuts and fish heave standard deviation for 120 s runs 
 
     python scripts/bench_series.py
 """
-import sys
 import time
 from pathlib import Path
 

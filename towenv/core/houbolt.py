@@ -46,7 +46,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     On success ``state`` holds the new time level; on failure ``state`` is left untouched (the trial
     solution lives in the work arrays), so the caller can retry with a smaller step.
     """
-    seg_lo, seg_up, seg_uplocal, node_kind = topo.seg_lo, topo.seg_up, topo.seg_uplocal, topo.node_kind
+    seg_lo, seg_up, node_kind = topo.seg_lo, topo.seg_up, topo.node_kind
     node_nseg, node_segs, node_sgn, order, pos = topo.node_nseg, topo.node_segs, topo.node_sgn, topo.order, topo.pos
     body_node, body_aft_node = topo.body_node, topo.body_aft_node
     # the tension tree: the lists above with aft tow points merged into their bodies' nodes (monolithic series
@@ -568,7 +568,6 @@ def aft_point_influence(dt, planar, body_node, body_aft_node, tn_nseg, tn_segs, 
     linearisation in the Jacobian only: the residuals are evaluated at the iterate, so the converged solution
     does not depend on it. ``w``, ``m``: (3, 3) scratch."""
     hdt2 = 0.5 * dt * dt
-    c11 = 11.0 * dt / 12.0
     i2 = 2.0 / (dt * dt)
     for b in range(body_node.shape[0]):
         c = body_aft_node[b]

@@ -641,16 +641,16 @@ def aft_relaxation_np(sys, b, rs, lam, seg, tens, dt, axial=True):
     return kt, kr
 
 
-def aft_rotation_rows_np(sys, merged, body, relax, reduced, angs, tang, minv, dt):
+def aft_rotation_rows_np(sys, merged, body, reduced, angs, tang, minv, dt):
     """Monolithic series coupling: the correction of the tension matrix's rows for the segments hanging from a
     merged aft tow point c (sparse, S × S): their length depends on the tensions through r_c = r_a + Λᵀ r_aft,
     r_a moving as the node-local solve says and the body turning within the iteration as the relaxed
-    angle update says — δφ = W D W⁻¹ ½Δt² δω̇ (body axes; D = 1/relaxation factor, 0 for held roll/yaw),
+    angle update says — δφ = W D W⁻¹ ½Δt² δω̇ (body axes; D = 1, these bodies' angle update is not relaxed,
+    0 for held roll/yaw),
     δω̇ = G δf_c − X Λ (2/Δt²) δr_a, δr_c = δr_a + Λᵀ(δφ × r_aft). K's rows as assembled hold σ t·∂r_a/∂T;
     this adds σ t·(∂r_c/∂T − ∂r_a/∂T) (kernels: ``houbolt.aft_point_influence``, ``tension_system``)."""
     ns = sys.l0.shape[0]
     hdt2 = 0.5 * dt * dt
-    c11 = 11.0 * dt / 12.0
     rows, cols, vals = [], [], []
     for b in np.nonzero(merged)[0]:
         a, c = int(sys.body_node[b]), int(sys.body_aft_node[b])
@@ -884,7 +884,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
         K = tension_matrix_np(sys, seg.tang, minv, dt, [(sys.body_node[b], sys.body_aft_node[b], body[b][7])
                                                         for b in np.nonzero(merged)[0]])
         if np.any(merged):
-            K = K + aft_rotation_rows_np(sys, merged, body, relax, reduced, angs, seg.tang, minv, dt)
+            K = K + aft_rotation_rows_np(sys, merged, body, reduced, angs, seg.tang, minv, dt)
         slack = (tens <= 0.0) & (gres < 0.0)
         keep = sp.diags((~slack).astype(float))
         K = keep @ K @ keep + sp.diags(slack.astype(float))
