@@ -63,9 +63,8 @@ class _FreeBody:
         K.body_loads(0, lam, lam @ v_g, w, self.bp, self.btab_n, self.btab, 1025.0, 0.0, cur, f, m, np.zeros(1))
         mnode, fnode = np.zeros((1, 3, 3)), np.zeros((1, 3))
         s, v = self.s, self.v3
-        assert K._condense(0, 0, False, lam, w, v["tail"], self.bp, f, m, s["att"], s["atr"], s["arr"], s["arrinv"],
-                           v["hvec"], v["tmp3"], s["aeff"], s["X"], v["y"], mnode, fnode, False, False, v["hvec"],
-                           v["hvec"])
+        assert K.condense_body(0, 0, False, lam, w, v["tail"], self.bp, f, m, s["att"], s["atr"], s["arr"],
+                               s["arrinv"], v["hvec"], v["tmp3"], s["aeff"], s["X"], v["y"], mnode, fnode)
         a_g = np.linalg.solve(mnode[0], fnode[0])
         return a_g, v["y"] - s["X"] @ (lam @ a_g)
 
@@ -180,9 +179,8 @@ def test_off_centre_heave_added_mass_couples_heave_into_pitch(x_p):
     f, mm = np.zeros(3), np.zeros(3)
     s, v = fb.s, fb.v3
     mnode, fnode = np.zeros((1, 3, 3)), np.zeros((1, 3))
-    assert K._condense(0, 0, False, np.eye(3), np.zeros(3), v["tail"], fb.bp, f, mm, s["att"], s["atr"], s["arr"],
-                       s["arrinv"], v["hvec"], v["tmp3"], s["aeff"], s["X"], v["y"], mnode, fnode, False, False,
-                       v["hvec"], v["hvec"])
+    assert K.condense_body(0, 0, False, np.eye(3), np.zeros(3), v["tail"], fb.bp, f, mm, s["att"], s["atr"],
+                           s["arr"], s["arrinv"], v["hvec"], v["tmp3"], s["aeff"], s["X"], v["y"], mnode, fnode)
     theta_dd = (v["y"] - s["X"] @ np.array([0.0, 0.0, a_z]))[1]
     assert theta_dd == pytest.approx(x_p * A33 * a_z / (I_yy + x_p ** 2 * A33), rel=1e-12)
     m_eff = m + A33 - (x_p * A33) ** 2 / (I_yy + x_p ** 2 * A33)

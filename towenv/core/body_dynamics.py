@@ -262,12 +262,12 @@ def condense_body(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr,
                   mnode, fnode):
     """Condense rigid body ``b`` onto its tow-point node ``a`` (all three rotations free): see ``_condense``."""
     return _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
-                     mnode, fnode, False, False, tmp3, tmp3)
+                     mnode, fnode, False, False, tmp3, tmp3, aeff, tmp3)
 
 
 @njit(cache=True)
 def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3, aeff, X, y,
-              mnode, fnode, reduced, implicit, prot, wdot):
+              mnode, fnode, reduced, implicit, prot, wdot, pmass, astar):
     """Condense rigid body ``b`` onto its tow-point node ``a`` (model.md 3.4, Schur complement).
 
     ``implicit`` (the Houbolt step's bodies with a monolithically coupled tail): the rotational stiffness and
@@ -275,7 +275,12 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
     sides of the rotational equation, (A_rr + P) ω̇ = M − A_rt a + P ω̇*, with ω̇* (``wdot``) the angular
     acceleration of the current iterate: at convergence ω̇ = ω̇* and the equation is the body's own; during
     the iteration the tow-point node sees the rotation the relaxed update will make (and the angle update is
-    then not relaxed again: ``houbolt.body_angle_update``).
+    then not relaxed again: ``houbolt.body_angle_update``). With it, ``pmass`` (body axes) is the mass (and
+    (11Δt/12)-scaled drag damping) of the tail's aft node, which rides on the aft point r_aft: as a point mass
+    there it adds ΔA = [[P_m, −P_m S(r)], [S(r) P_m, −S(r) P_m S(r)]] to the mass blocks, and ΔA·(a*, ω̇*) to the
+    loads (``astar``: the iterate's tow-point acceleration, body axes) — again both sides, so the converged
+    step is unchanged while the iteration sees the aft node move with the body (its loads reach the body as
+    the aft node's reaction at the iterate: ``tail_force``).
 
     ``reduced``: the body pitches only (roll and yaw held by constraint moments), so only the pitch row and
     column of A_rr take part: A_rr⁻¹ is replaced by e_y e_yᵀ / A_rr,yy.
@@ -316,6 +321,34 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
     for i in range(3):
         mb[i] -= tmp3[i]
     if implicit:
+        r0 = bp[b, BP_AFT_TOW_POINT]
+        r1 = bp[b, BP_AFT_TOW_POINT + 1]
+        r2 = bp[b, BP_AFT_TOW_POINT + 2]
+        # aeff as scratch (written below): dtr = −P_m S(r) in aeff
+        for i in range(3):
+            aeff[i, 0] = -(pmass[i, 1] * r2 - pmass[i, 2] * r1)
+            aeff[i, 1] = -(-pmass[i, 0] * r2 + pmass[i, 2] * r0)
+            aeff[i, 2] = -(pmass[i, 0] * r1 - pmass[i, 1] * r0)
+        for i in range(3):
+            # (S(r) P_m)[i, :] = r × column ... row i of S times P_m
+            for j in range(3):
+                if i == 0:
+                    srp = -r2 * pmass[1, j] + r1 * pmass[2, j]
+                    srd = -r2 * aeff[1, j] + r1 * aeff[2, j]
+                elif i == 1:
+                    srp = r2 * pmass[0, j] - r0 * pmass[2, j]
+                    srd = r2 * aeff[0, j] - r0 * aeff[2, j]
+                else:
+                    srp = -r1 * pmass[0, j] + r0 * pmass[1, j]
+                    srd = -r1 * aeff[0, j] + r0 * aeff[1, j]
+                # loads: F += P_m a* + dtr ω̇*, M += S P_m a* + (S dtr) ω̇*  (S dtr = −S P_m S)
+                fb[i] += pmass[i, j] * astar[j] + aeff[i, j] * wdot[j]
+                mb[i] += srp * astar[j] + srd * wdot[j]
+                arr[i, j] += srd
+        for i in range(3):
+            for j in range(3):
+                att[i, j] += pmass[i, j]
+                atr[i, j] += aeff[i, j]
         for i in range(3):
             arr[i, i] += prot[i]
             mb[i] += prot[i] * wdot[i]

@@ -273,7 +273,7 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
             iterate_omega_dot(dt, b, angs, hist_ang, dang, omg, scr[5], scr[4], tmp33b)
             for i in range(3):
                 scr[4, i] = hdt2 * bkc[b, BK_STIFFNESS + i] + 11.0 * dt / 12.0 * bkc[b, BK_DAMPING + i]
-            aft_node_rotary_inertia(b, c, dt, lam, bp, mnode, bnode, scr[4])
+            aft_node_point_mass(b, a, c, dt, lam, rs, r_t, r_tm1, r_tm2, mnode, bnode, tmp33, scr[3])
         if c >= 0:
             node_reaction(c, rs, r_t, r_tm1, r_tm2, dt, node_nseg, node_segs, node_sgn, tang, tens,
                           mnode, fnode, react)
@@ -284,7 +284,7 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
                     for i in range(3):
                         react[i] -= node_sgn[c, k] * tens[sk] * tang[sk, i]
         if not _condense(b, a, c >= 0, lam, w, react, bp, fb, mb, att, atr, arr, arrinv, hvec, tmp3,
-                         tmp33b, bX[b], by[b], mnode, fnode, reduced, merged, scr[4], scr[5]):
+                         tmp33b, bX[b], by[b], mnode, fnode, reduced, merged, scr[4], scr[5], tmp33, scr[3]):
             return True
         if merged:
             aft_transfer(b, lam, atr, arrinv, bp, gaft[b], haft[b])
@@ -345,9 +345,9 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
         # a body towing a tail from its aft tow point. Relaxed coupling: the tail's pull is a load on the body
         # inside the Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ
         # + T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness).
-        # Monolithic coupling: the pull is in the tension solve; the aft node's inertia, drag and string
-        # stiffness, which move with the tow point, enter both sides through H (the exact translational
-        # derivative of the load they put on the body, so again the rate only)
+        # Monolithic coupling: the pull is in the tension solve, the aft node's inertia and drag in the body's
+        # condensation (body_dynamics._condense); the tail segments' string stiffness, which moves with the tow
+        # point, enters both sides through H (again the rate only)
         hb = -1
         for b in range(nb if any_aft else 0):
             c = body_aft_node[b]
@@ -357,7 +357,7 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
                 hb = b
                 for i in range(3):
                     for j in range(3):
-                        tmp33b[i, j] = mnode[c, i, j] + c11 * bnode[c, i, j]
+                        tmp33b[i, j] = 0.0
                 for k in range(node_nseg[c]):
                     sk = node_segs[c, k]
                     kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
@@ -500,33 +500,27 @@ def tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, ten
 
 
 @njit(cache=True, _nrt=False)
-def aft_node_rotary_inertia(b, c, dt, lam, bp, mnode, bnode, prot):
-    """Adds to ``prot`` (the implicit rotation of a body with a monolithically coupled tail) what the aft node's own
-    mass and drag damping (half the tail's top segment: they ride on the aft point) resist a rotation about each
-    body axis e_i with: uᵀ (M_c + (11Δt/12) B_c) u, u = Λᵀ (e_i × r_aft). These loads reach the body as the aft
-    node's reaction, evaluated at the iterate; without them in P the angle iteration of a light body whose aft
-    node is heavy or strongly damped (a long array towed fast) overshoots and diverges."""
+def aft_node_point_mass(b, a, c, dt, lam, rs, r_t, r_tm1, r_tm2, mnode, bnode, pmass, astar):
+    """For the condensation of a body with a monolithically coupled tail (``body_dynamics._condense``): the aft
+    node's mass and drag damping, P_m = Λ (M_c + (11Δt/12) B_c) Λᵀ (body axes) — they ride on the aft point —
+    and the iterate's tow-point acceleration a* = Λ r̈ (Houbolt), body axes. Without them the aft node's loads
+    reach the body only as its reaction at the iterate, and the angle iteration of a light body whose aft node
+    is heavy or strongly damped (a 50 kg connector towing an array at 4 m/s) converges slowly or diverges."""
     c11 = 11.0 * dt / 12.0
-    r0 = bp[b, BP_AFT_TOW_POINT]
-    r1 = bp[b, BP_AFT_TOW_POINT + 1]
-    r2 = bp[b, BP_AFT_TOW_POINT + 2]
+    idt2 = 1.0 / (dt * dt)
     for i in range(3):
-        # e_i × r_aft in body axes
-        if i == 0:
-            v0, v1, v2 = 0.0, -r2, r1
-        elif i == 1:
-            v0, v1, v2 = r2, 0.0, -r0
-        else:
-            v0, v1, v2 = -r1, r0, 0.0
-        u0 = lam[0, 0] * v0 + lam[1, 0] * v1 + lam[2, 0] * v2
-        u1 = lam[0, 1] * v0 + lam[1, 1] * v1 + lam[2, 1] * v2
-        u2 = lam[0, 2] * v0 + lam[1, 2] * v1 + lam[2, 2] * v2
-        acc = 0.0
         for j in range(3):
-            uj = u0 if j == 0 else (u1 if j == 1 else u2)
-            acc += uj * ((mnode[c, j, 0] + c11 * bnode[c, j, 0]) * u0 + (mnode[c, j, 1] + c11 * bnode[c, j, 1]) * u1
-                         + (mnode[c, j, 2] + c11 * bnode[c, j, 2]) * u2)
-        prot[i] += acc
+            acc = 0.0
+            for k in range(3):
+                for m in range(3):
+                    acc += lam[i, k] * (mnode[c, k, m] + c11 * bnode[c, k, m]) * lam[j, m]
+            pmass[i, j] = acc
+    for i in range(3):
+        astar[i] = 0.0
+    for k in range(3):
+        ak = (2.0 * rs[a, k] - 5.0 * r_t[a, k] + 4.0 * r_tm1[a, k] - r_tm2[a, k]) * idt2
+        for i in range(3):
+            astar[i] += lam[i, k] * ak
 
 
 @njit(cache=True, _nrt=False)

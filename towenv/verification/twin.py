@@ -812,13 +812,20 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
                     _, kr = aft_relaxation_np(sys, b, rs, lam, seg, tens, dt, axial=False)
                     relax[b, :3] += kr
                 prot = hdt2 * relax[b, :3] + c11 * relax[b, 3:]
-                # the aft node's mass and drag damping ride on the aft point: uᵀ(M_c + (11Δt/12) B_c)u, u = Λᵀ(e_i × r_aft)
-                for i in range(3):
-                    u = lam.T @ np.cross(_I3[i], P["r_aft"])
-                    prot[i] += u @ (mnode[c] + c11 * bnode[c]) @ u
                 Wm = _euler_rate_matrix(angs[b])
                 e0 = omega_dot_to_euler_acc_np(angs[b], dang, w, np.zeros(3))
                 wdot = Wm @ (houbolt_acc(angs[b], hist_ang[:, b], dt) - e0)
+                # the aft node's mass and drag damping ride on the aft point: a point mass P_m there,
+                # ΔA = [[P_m, −P_m S(r)], [S(r) P_m, −S(r) P_m S(r)]] on both sides with the iterate's (a*, ω̇*)
+                Mb = lam @ (mnode[c] + c11 * bnode[c]) @ lam.T
+                Sr = _skew(P["r_aft"])
+                astar = lam @ houbolt_acc(rs[a], hist_r[:, a], dt)
+                dtt, dtr, drt, drr = Mb, -Mb @ Sr, Sr @ Mb, -Sr @ Mb @ Sr
+                F = F + dtt @ astar + dtr @ wdot
+                M = M + drt @ astar + drr @ wdot
+                A_tt = A_tt + dtt
+                A_tr = A_tr + dtr
+                A_rr = A_rr + drr
                 A_rr = A_rr + np.diag(prot)
                 M = M + prot * wdot
             if reduced[b]:
@@ -845,9 +852,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             if c >= 0:      # series tow: relax the body–tail coupling (rate only)
                 kt, kr = aft_relaxation_np(sys, b, rs, body[b][0], seg, tens, dt, axial=not merged[b])
                 if merged[b]:
-                    # the aft node's inertia, drag and string stiffness move with the tow point: their
-                    # derivatives through H (exact translational Jacobian of the aft point's loads)
-                    lin[sys.body_node[b]] += body[b][7] @ (mnode[c] + c11 * bnode[c] + hdt2 * kt)
+                    # the tail segments' string stiffness moves with the tow point: through H (the aft node's
+                    # inertia and drag are in the condensation above)
+                    lin[sys.body_node[b]] += body[b][7] @ (hdt2 * kt)
                 else:
                     lin[sys.body_node[b]] += hdt2 * kt
                     if it == 1:
