@@ -42,7 +42,9 @@ excursions): under skyhook the mean of max(|s| − 0.85, 0)² on the 12 training
 ≈ 1e-6 … 3e-5 (first iterations of the second probe), so w_margin = 30 — sized on the idea "0.95 for 10 % of
 the window costs ≈ 3 % of σ_h" — contributes ≤ 0.001 and does nothing; 1000 makes skyhook's term ≈ 0.001 …
 0.03 and a doubled tail a few % of σ_h (a stroke at 0.95 for 10 % of the window would cost 1.0). The first
-probe's cost is ``--hit-weight 0.05 --margin-weight 0``.
+probe's cost is ``--hit-weight 0.05 --margin-weight 0``. Optional per-sea-state hit weights (``hit_weights`` =
+{WMO code: w}, CLI ``--hit-weights 3:1.0,4:0.3``; the code of an entry is its base wave seed // 1000): an episode
+of a listed code is charged that weight per hit instead of w_hit (default none: w_hit everywhere).
 
 Optional stop guard (``stop_guard`` = g, 0 = off; stored in the policy file's metadata): outside the linear
 part, when |s| > g and the stroke moves outward (s · ṡ > 0), the action is (1, 1) — maximum stiffness and
@@ -66,7 +68,8 @@ from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset
 __all__ = ["ARSCompensatorPolicy", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
            "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
-           "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "main"]
+           "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "entry_hit_weights", "parse_hit_weights",
+           "main"]
 
 ENV_ID = COMPENSATOR_ID
 #: ``meta["algo"]`` of the policy files (scripts/evaluate.py dispatches on env_id + algo)
@@ -155,6 +158,34 @@ def _residual(theta, phi):
 def margin_penalty(s, m0: float = DEFAULT_MARGIN_START):
     """max(|s| − m0, 0)² element-wise (s = stroke as a fraction of the half stroke)."""
     return np.maximum(np.abs(np.asarray(s, float)) - float(m0), 0.0) ** 2
+
+
+def entry_hit_weights(entries, hit_weight: float, hit_weights: dict | None = None) -> np.ndarray:
+    """The hit weight of every ``(sea, base_seed)`` entry of the evaluation list: ``hit_weights[code]`` for the
+    entries of a listed WMO code (code = base seed // 1000, the seeds being 1000·code + j), else ``hit_weight``.
+    A listed code absent from ``entries`` is an error (a typo would silently change nothing)."""
+    codes = [int(b) // 1000 for _s, b in entries]
+    hw = {int(c): float(w) for c, w in (hit_weights or {}).items()}
+    missing = sorted(set(hw) - set(codes))
+    if missing:
+        raise ValueError(f"hit_weights: codes {missing} are not sea states of the training set {sorted(set(codes))}")
+    bad = [c for c, w in hw.items() if not (math.isfinite(w) and w >= 0)]
+    if bad:
+        raise ValueError(f"hit_weights: the weights of codes {bad} must be finite and >= 0")
+    return np.array([hw.get(c, float(hit_weight)) for c in codes])
+
+
+def parse_hit_weights(text: str | None) -> dict:
+    """``"3:1.0,4:0.3"`` -> {3: 1.0, 4: 0.3} (the CLI's ``--hit-weights``); empty/None -> {}."""
+    out = {}
+    for part in (text or "").split(","):
+        if not part.strip():
+            continue
+        code, sep, w = part.partition(":")
+        if not sep:
+            raise ValueError(f"--hit-weights: {part!r} is not CODE:WEIGHT")
+        out[int(code)] = float(w)
+    return out
 
 
 def stop_guard_mask(reader, obs, guard: float):
@@ -375,12 +406,14 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
           top: int = 4, nu: float = 0.01, alpha: float = 0.01, pitch_weight: float = 0.5,
           hit_weight: float = DEFAULT_HIT_WEIGHT, episode_seconds: float = 180.0, fail_penalty: float = 1.0,
           margin_weight: float = DEFAULT_MARGIN_WEIGHT, margin_start: float = DEFAULT_MARGIN_START,
-          stop_guard: float = 0.0, progress: bool = True, log=print) -> ARSCompensatorPolicy:
+          stop_guard: float = 0.0, hit_weights: dict | None = None, progress: bool = True,
+          log=print) -> ARSCompensatorPolicy:
     """ARS V1-t (module docstring) on the 12 evaluation (Hs, Tp, heading) entries with training wave seeds; one
     search per sea state of the skyhook table, sharing one batched rollout per iteration. Cost of an episode:
     ln(σ_h/σ_h,sky) + pitch_weight · ln(σ_θ/σ_θ,sky) + hit_weight · hits + margin_weight · mean max(|s| −
     margin_start, 0)² on the same waves (``margin_weight=0, hit_weight=0.05``: the first probe's cost), with the
-    stop guard ``stop_guard`` (0 = off) in every rollout and in the returned policy. Stops after
+    stop guard ``stop_guard`` (0 = off) in every rollout and in the returned policy. ``hit_weights`` ({WMO code:
+    w}, :func:`entry_hit_weights`) replaces hit_weight in the episodes of the listed codes. Stops after
     ``max_iterations`` (≤ :data:`MAX_ITERATIONS`) or when the next iteration would pass ``minutes`` of wall time."""
     if not 1 <= int(max_iterations) <= MAX_ITERATIONS:
         raise ValueError(f"max_iterations must be in 1..{MAX_ITERATIONS} (training seeds stay disjoint)")
@@ -395,6 +428,10 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
     keys0 = sorted(table)
     ent = {k: [i for i, (sea, _s) in enumerate(ev0) if nearest_key(table, sea) == k] for k in keys0}
     keys = [k for k in keys0 if ent[k]]
+    w_hit = entry_hit_weights(ev0, hit_weight, hit_weights)         # per evaluation entry
+    hit_weights = {int(c): float(w) for c, w in (hit_weights or {}).items()}
+    codes = [int(b) // 1000 for _s, b in ev0]
+    code_set = sorted(set(codes))
     C, K = len(keys), int(directions)
     n_pert = sum(2 * K * len(ent[k]) for k in keys)
     n_ref = len(ev0)
@@ -406,7 +443,8 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
     log(f"[ars_comp] seed {seed}: {C} sea states x {K} directions x 2 signs + 2 x {n_ref} reference episodes = "
         f"{n_copies} copies of {episode_seconds:g} s per iteration; nu={nu} alpha={alpha} top={top} "
         f"pitch_weight={pitch_weight} hit_weight={hit_weight} margin_weight={margin_weight} "
-        f"margin_start={margin_start} stop_guard={stop_guard}; {N_ACT} x {N_FEATURES} weights per sea state")
+        f"margin_start={margin_start} stop_guard={stop_guard} hit_weights={hit_weights or 'none'}; "
+        f"{N_ACT} x {N_FEATURES} weights per sea state")
     it = 0
     last = 0.0
     while it < max_iterations:
@@ -439,8 +477,8 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
         with np.errstate(invalid="ignore", divide="ignore"):
             cost = np.where(np.isfinite(sh[:n_pert]),
                             np.log(sh[:n_pert] / base_h[owner]) + pitch_weight * np.log(sp[:n_pert] / base_p[owner])
-                            + hit_weight * hits[:n_pert] + margin_weight * mg[:n_pert],
-                            fail_penalty + hit_weight * hits[:n_pert])
+                            + w_hit[owner] * hits[:n_pert] + margin_weight * mg[:n_pert],
+                            fail_penalty + w_hit[owner] * hits[:n_pert])
         j = 0
         steps = []
         for ci, k in enumerate(keys):
@@ -461,12 +499,17 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
                       "hits_skyhook": float(base_hits.sum()), "hits_perturbed_mean": float(hits[:n_pert].mean()),
                       "margin": float(np.nanmean(cur_m)), "margin_skyhook": float(np.nanmean(base_m)),
                       "cost": float(np.nanmean(np.log(cur_h / base_h) + pitch_weight * np.log(cur_p / base_p)
-                                               + hit_weight * cur_hits + margin_weight * cur_m)),
+                                               + w_hit * cur_hits + margin_weight * cur_m)),
+                      "hits_by_code": {str(c): float(cur_hits[np.array(codes) == c].sum()) for c in code_set},
+                      "hits_skyhook_by_code": {str(c): float(base_hits[np.array(codes) == c].sum())
+                                               for c in code_set},
                       "seconds": last, "failures": int(np.sum(~np.isfinite(sh)))})
         if progress:
             log(f"[ars_comp] it {it:3d} ({last:5.1f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): policy "
                 f"before this step vs skyhook on {n_ref} fresh training episodes: heave {100 * (pooled_h - 1):+6.2f} %, "
-                f"pitch {100 * (pooled_p - 1):+5.1f} %, hits {int(cur_hits.sum())} (skyhook {int(base_hits.sum())}; "
+                f"pitch {100 * (pooled_p - 1):+5.1f} %, hits {int(cur_hits.sum())} (by code "
+                f"{'/'.join(str(int(cur_hits[np.array(codes) == c].sum())) for c in code_set)}; skyhook "
+                f"{int(base_hits.sum())}; "
                 f"perturbed mean {hits[:n_pert].mean():.2f}/episode); margin {np.nanmean(cur_m):.2e} (skyhook "
                 f"{np.nanmean(base_m):.2e}); |step| {', '.join(f'{s:.4f}' for s in steps)}")
         it += 1
@@ -480,7 +523,8 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
                                 "hit_weight": hit_weight, "episode_seconds": episode_seconds, "minutes": minutes,
                                 "max_iterations": max_iterations, "fail_penalty": fail_penalty,
                                 "margin_weight": margin_weight, "margin_start": margin_start,
-                                "stop_guard": float(stop_guard)},
+                                "stop_guard": float(stop_guard),
+                                "hit_weights": {str(c): w for c, w in sorted(hit_weights.items())}},
             "train_seeds": f"1000*code + j + {TRAIN_SEED_OFFSET} + 100*iteration + 100000*{int(seed)}",
             "curve": curve}
     return ARSCompensatorPolicy({k: theta[ci] for ci, k in enumerate(keys)}, table, FEATURE_SCALES, meta,
@@ -519,6 +563,9 @@ def main(argv=None) -> int:
     ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
     ap.add_argument("--hit-weight", type=float, default=DEFAULT_HIT_WEIGHT,
                     help=f"cost of one end-stop hit (in ln σ units; default {DEFAULT_HIT_WEIGHT}; the first probe: 0.05)")
+    ap.add_argument("--hit-weights", default="",
+                    help="per-sea-state hit weights CODE:W[,CODE:W...] (WMO codes of the training set, e.g. "
+                         "3:1.0); the other codes keep --hit-weight (default: none)")
     ap.add_argument("--margin-weight", type=float, default=DEFAULT_MARGIN_WEIGHT,
                     help="weight of the stroke-margin term mean max(|s| - m0, 0)^2 over the scored window "
                          f"(default {DEFAULT_MARGIN_WEIGHT:g}; 0 = the first probe's cost)")
@@ -542,6 +589,12 @@ def main(argv=None) -> int:
         ap.error(f"need --directions >= 1, 1 <= --top <= --directions, 1 <= --max-iterations <= {MAX_ITERATIONS}, "
                  f"--pitch-weight >= 0, --hit-weight >= 0, --margin-weight >= 0, 0 <= --margin-start < 1, "
                  f"0 <= --stop-guard <= 1, --seed >= 0")
+    try:
+        hit_weights = parse_hit_weights(a.hit_weights)
+        if any(not (math.isfinite(w) and w >= 0) for w in hit_weights.values()):
+            raise ValueError("--hit-weights: every weight must be finite and >= 0")
+    except ValueError as exc:
+        ap.error(str(exc))
     if a.episode_seconds < 120.0:
         ap.error("--episode-seconds must be >= 120 (the score starts at 60 s)")
     if a.measure_scales:
@@ -550,7 +603,7 @@ def main(argv=None) -> int:
     out = Path(a.export or f"runs/ars_CompensatorGains-v0_s{a.seed}.npz")
     pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
                 a.hit_weight, a.episode_seconds, margin_weight=a.margin_weight, margin_start=a.margin_start,
-                stop_guard=a.stop_guard)
+                stop_guard=a.stop_guard, hit_weights=hit_weights)
     save_policy(pol, out)
     print(f"[ars_comp] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
     return 0

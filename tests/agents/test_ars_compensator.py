@@ -271,3 +271,44 @@ def test_cli_refuses_bad_cost_options():
                 ["--hit-weight", "nan"]):
         with pytest.raises(SystemExit):
             AC.main(bad)
+
+
+def test_per_sea_state_hit_weights_enter_the_cost(monkeypatch):
+    """``hit_weights`` ({WMO code: w}) replaces the hit weight in the cost of that code's episodes. A fake batched
+    rollout (σ ratios 1, margin 0) gives one end-stop hit to every '+' perturbation and to every episode of the
+    current policy: with the weights 3: 1, 4: 0, 5: 0 only the code-3 search sees a reward difference and moves
+    (codes 4 and 5 stay exactly at Θ = 0), and the recorded cost is the per-code weighted hit count (4 of 12
+    episodes at weight 1 = 1/3); with the default (w_hit = 0.3 everywhere) all three move and the cost is 0.3."""
+    def fake(venv, batch, seas, seeds, theta, **kw):
+        n = len(seas)
+        n_pert = n - 24                                  # 2 × 12 reference episodes at the end
+        hits = np.zeros(n)
+        # perturbations in blocks of 2 · K · n_entries (K = 1, 4 entries per sea state): '+' first, then '−'
+        hits[:n_pert] = [(j // 4) % 2 == 0 for j in range(n_pert)]
+        hits[n_pert:n_pert + 12] = 1.0                   # the current policy, not skyhook
+        return np.ones(n), np.ones(n), hits, np.zeros(n)
+
+    monkeypatch.setattr(AC, "rollout_batch", fake)
+    ev = gym.make(COMP).unwrapped.eval_sea_states()
+    table = load_tuned()["skyhook"]
+    code_of = {nearest_key(table, sea): b // 1000 for sea, b in ev}
+    kw = dict(seed=3, minutes=30.0, max_iterations=1, directions=1, top=1, episode_seconds=120.0, progress=False)
+    per = AC.train(hit_weights={3: 1.0, 4: 0.0, 5: 0.0}, **kw)
+    moved = {code_of[k]: bool(np.any(v != 0)) for k, v in per.theta.items()}
+    assert moved == {3: True, 4: False, 5: False}
+    assert per.meta["curve"][0]["cost"] == pytest.approx(4.0 / 12.0)
+    assert per.meta["curve"][0]["hits_by_code"] == {"3": 4.0, "4": 4.0, "5": 4.0}
+    assert per.meta["hyperparameters"]["hit_weights"] == {"3": 1.0, "4": 0.0, "5": 0.0}
+    default = AC.train(**kw)
+    assert all(np.any(v != 0) for v in default.theta.values())
+    assert default.meta["curve"][0]["cost"] == pytest.approx(AC.DEFAULT_HIT_WEIGHT)
+    assert default.meta["hyperparameters"]["hit_weights"] == {}
+    # the helper, and a code outside the training set is refused
+    w = AC.entry_hit_weights(ev, 0.3, {3: 1.0})
+    assert [float(x) for x in w] == [1.0] * 4 + [0.3] * 8
+    with pytest.raises(ValueError, match="codes"):
+        AC.entry_hit_weights(ev, 0.3, {7: 1.0})
+    assert AC.parse_hit_weights("3:1.0, 5:0.5") == {3: 1.0, 5: 0.5} and AC.parse_hit_weights("") == {}
+    for bad in (["--hit-weights", "3:-1"], ["--hit-weights", "3"], ["--hit-weights", "x:1"]):
+        with pytest.raises(SystemExit):
+            AC.main(bad)
