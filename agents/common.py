@@ -136,11 +136,23 @@ def read_ars_file(path, feature_names: list, expect: dict | None = None, what: s
     differ from ``feature_names``."""
     import json
     from pathlib import Path
+    import zipfile
     path = Path(path)
-    with np.load(path, allow_pickle=False) as z:
+    if not path.is_file():
+        raise ValueError(f"{path}: no such policy file")
+    try:
+        z = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{path}: not a readable ARS policy file (.npz): {type(exc).__name__}: {exc}") from None
+    if not isinstance(z, np.lib.npyio.NpzFile):
+        raise ValueError(f"{path}: not an ARS policy file (a single .npy array, not an .npz archive)")
+    with z:
         if "theta" not in z or "keys" not in z or "meta" not in z:
             raise ValueError(f"{path}: not an ARS policy file (no theta/keys/meta)")
-        meta = json.loads(str(z["meta"]))
+        try:
+            meta = json.loads(str(z["meta"]))
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+            raise ValueError(f"{path}: damaged ARS policy file (its metadata cannot be read: {exc})") from None
         for k, v in (expect or {}).items():
             if meta.get(k) != v:
                 raise ValueError(f"{path}: not {what} (its {k} is {meta.get(k)!r}, not {v!r})")

@@ -110,6 +110,14 @@ def test_policy_file_round_trip_and_refusal(tmp_path, env):
     np.savez(tmp_path / "other.npz", x=np.zeros(3))
     with pytest.raises(ValueError, match="not an ARS policy"):
         ars.load_ars_policy(tmp_path / "other.npz")
+    # damaged or foreign files: one ValueError naming the file, not a numpy/zipfile traceback
+    raw = f.read_bytes()
+    (tmp_path / "cut.npz").write_bytes(raw[: len(raw) // 2])
+    (tmp_path / "text.npz").write_text("not a policy")
+    np.save(tmp_path / "single.npy", np.zeros(3))
+    for bad in ("cut.npz", "text.npz", "single.npy", "missing.npz"):
+        with pytest.raises(ValueError, match=bad.replace(".", r"\.")):
+            ars.load_ars_policy(tmp_path / bad)
     with pytest.raises(RuntimeError, match="bind_env"):
         _policy().predict(np.zeros(env.observation_space.shape, np.float32))
 
