@@ -312,3 +312,25 @@ def test_per_sea_state_hit_weights_enter_the_cost(monkeypatch):
     for bad in (["--hit-weights", "3:-1"], ["--hit-weights", "3"], ["--hit-weights", "x:1"]):
         with pytest.raises(SystemExit):
             AC.main(bad)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_committed_policies_ship_load_and_act(env, seed):
+    """The three committed policies (docs/agents.md "Results") are package data of the installed ``agents``, load
+    with the recipe they were trained with (55 iterations, stop guard 0.9, the skyhook table's sea states), and act:
+    inside the action box and away from skyhook's own action (a trained residual, not Θ = 0)."""
+    from pathlib import Path
+
+    import agents
+    path = Path(agents.__file__).parent / "trained" / f"ars_CompensatorGains-v0_s{seed}.npz"
+    pol = AC.load_policy(path)
+    assert (pol.meta["seed"], pol.meta["iterations"], pol.stop_guard) == (seed, 55, 0.9)
+    assert set(pol.theta) == set(pol.base_table) == set(load_tuned()["skyhook"])
+    assert all(np.abs(th).max() > 0 for th in pol.theta.values())
+    pol.bind_env(env)
+    sea, s = env.unwrapped.eval_sea_states()[5]
+    acts = _actions(env, pol, sea, s + 123456)
+    sky = _actions(env, make_baseline("skyhook", env), sea, s + 123456, steps=1)
+    assert acts.shape[0] == env.unwrapped.max_steps and np.all(np.isfinite(acts))
+    assert np.all(np.abs(acts) <= 1.0)
+    assert not np.allclose(acts[0], sky[0], atol=1e-3)
