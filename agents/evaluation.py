@@ -11,15 +11,13 @@ import math
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .baselines import REFERENCE, baseline_names, load_tuned, make_baseline
-from .common import ObsReader, env_kind, sea_key, sea_label
-from .metrics import (EpisodeRecord, bootstrap_mean_ci, default_discard, episode_metrics, paired_reduction_ci,
-                      rollout)
+from .common import env_kind, sea_key, sea_label
+from .metrics import bootstrap_mean_ci, default_discard, episode_metrics, paired_reduction_ci, rollout
 
 __all__ = ["Controller", "EvalResult", "eval_episodes", "make_eval_env", "run_evaluation", "GOALS"]
 
