@@ -14,7 +14,11 @@ directions, step normalised by the rewards' standard deviation). The policy::
   copied into the policy file, so retuning ``baselines.yml`` later does not change a trained policy);
 * ``φ`` — :data:`HISTORY_CHANNELS` (MRU along-cable velocity, acceleration, displacement) at the lags
   :data:`LAG_STEPS` (0, 0.2, …, 2.0 s), :data:`INSTANT_CHANNELS` (winch-line length change, fish heave about its
-  running mean and its rate) and a constant, each divided by a fixed scale (:data:`FEATURE_SCALES`);
+  running mean and its rate) and a constant, each divided by a fixed scale (:data:`FEATURE_SCALES`); feature set
+  ``"v2"`` (:data:`FEATURE_SETS`, the default for new training) adds six instant channels the ``"v1"`` policies
+  (committed before 2026-12-03) do not see: the winch's actual speed, the policy's own last action, top tension,
+  the sheave's cable angle, fish pitch about its running mean and its rate, each as (x − offset)/scale with
+  :data:`EXTRA_SCALES`;
 * ``θ_c`` — one weight vector per sea state of the along-cable gain table (the same schedule as the base).
 
 θ = 0 is the along-cable law exactly. The policy is causal: it acts on the observation vector and its own
@@ -54,14 +58,37 @@ FEATURE_SCALES = {"tow_vel_along": 0.7089, "tow_acc_along": 1.4686, "tow_disp_al
 TRAIN_SEED_OFFSET = 40000
 N_HISTORY = max(LAG_STEPS) + 1
 GAIN_KEYS = ("g_ff", "tau", "kl", "kp", "kd")
+#: the extra instant channels of feature set "v2": channel -> (offset, scale), the feature is (x − offset)/scale.
+#: Offset and scale: each channel's mean and standard deviation under the along-cable law (3 × 180 s code-4
+#: episodes, wave seeds + 77777, in the channel's physical unit: winch speed and last action as a fraction of the
+#: winch's maximum speed, top tension as a ratio to its static value, angles in rad, rates in rad/s); measured
+#: once and kept fixed so that the policy is a fixed function.
+EXTRA_SCALES = {"winch_speed": (0.0, 0.284), "last_action": (0.0, 0.320), "top_tension": (0.996, 0.178),
+                "cable_angle": (0.467, 0.0533), "fish_pitch_dev": (0.0, 0.0772), "fish_pitch_rate": (0.0, 0.190)}
+#: feature sets: name -> extra instant channels after the v1 features (before the constant)
+FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES)}
+#: the feature set of new training runs (policy files without a ``feature_set`` entry are "v1")
+DEFAULT_FEATURE_SET = "v2"
 
 
-def feature_names() -> list[str]:
+def _check_feature_set(feature_set: str) -> str:
+    if feature_set not in FEATURE_SETS:
+        raise ValueError(f"feature_set must be one of {sorted(FEATURE_SETS)} (got {feature_set!r})")
+    return feature_set
+
+
+def feature_names(feature_set: str = "v1") -> list[str]:
+    extra = FEATURE_SETS[_check_feature_set(feature_set)]
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
-            + ["const"])
+            + list(extra) + ["const"])
 
 
-N_FEATURES = len(feature_names())
+def n_features(feature_set: str = "v1") -> int:
+    return len(feature_names(feature_set))
+
+
+#: the number of v1 features (kept for the v1 callers; use :func:`n_features` for a given set)
+N_FEATURES = n_features("v1")
 
 
 def _train_seed(base_seed: int, iteration: int, seed: int) -> int:
@@ -76,14 +103,18 @@ class ARSPolicy:
     acts_on = "observations (and their history) + sea state"
 
     def __init__(self, theta: dict, base_table: dict, scales: dict | None = None, meta: dict | None = None,
-                 name: str = "ars"):
+                 name: str = "ars", feature_set: str | None = None):
+        self.feature_set = _check_feature_set(feature_set or (meta or {}).get("feature_set", "v1"))
         self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
-        bad = [k for k, v in self.theta.items() if v.shape != (N_FEATURES,)]
+        nf = n_features(self.feature_set)
+        bad = [k for k, v in self.theta.items() if v.shape != (nf,)]
         if bad:
-            raise ValueError(f"ARSPolicy: theta entries {bad} do not have {N_FEATURES} features")
+            raise ValueError(f"ARSPolicy: theta entries {bad} do not have the {nf} features of feature set "
+                             f"{self.feature_set!r}")
         self.base_table = dict(base_table)
         self.scales = dict(FEATURE_SCALES | (scales or {}))
         self.meta = dict(meta or {})
+        self.meta["feature_set"] = self.feature_set
         self.meta.setdefault("algo", "ars")
         self.meta.setdefault("env_id", ENV_ID)
         self.meta.setdefault("env_kwargs", {})
@@ -117,13 +148,18 @@ class ARSPolicy:
             self._th = self.theta[nearest_key(self.theta, self.u.sea[0])]
             self._hist = None
         a_base = float(self.base.act(o)[0])
-        phi, self._hist = features_single(self.reader, o, self.scales, self._hist)
+        phi, self._hist = features_single(self.reader, o, self.scales, self._hist, self.feature_set)
         a = min(max(a_base + float(self._th @ phi), -1.0), 1.0)
         out = np.array([a], np.float32)
         return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
 
 
-def features_single(reader, obs, scales, hist):
+def _extra_single(reader, obs, name):
+    v = reader(obs, name)
+    return float(np.asarray(v).reshape(-1)[0])
+
+
+def features_single(reader, obs, scales, hist, feature_set: str = "v1"):
     """φ of one observation given the history ring ``hist`` ((3, N_HISTORY), newest first; None at episode start:
     filled with the first observation). Returns (φ, new ring). Same arithmetic as the batched :class:`_Batch`."""
     h = np.array([reader(obs, c) / scales[c] for c in HISTORY_CHANNELS])
@@ -133,7 +169,9 @@ def features_single(reader, obs, scales, hist):
         hist = np.roll(hist, 1, axis=1)
         hist[:, 0] = h
     inst = [reader(obs, c) / scales[c] for c in INSTANT_CHANNELS]
-    return np.concatenate([hist[:, list(LAG_STEPS)].reshape(-1), inst, [1.0]]), hist
+    extra = [(_extra_single(reader, obs, c) - EXTRA_SCALES[c][0]) / EXTRA_SCALES[c][1]
+             for c in FEATURE_SETS[feature_set]]
+    return np.concatenate([hist[:, list(LAG_STEPS)].reshape(-1), inst, extra, [1.0]]), hist
 
 
 # ============================================================================ batched rollouts (training)
@@ -141,14 +179,24 @@ class _Batch:
     """The along-cable law (``classical.along_cable_velocity``, shared with the single-env baseline) and the
     features for a batch of observations (observation float32 → float64 × channel scale, as ``ObsReader``)."""
 
-    def __init__(self, venv, base_table: dict, scales: dict):
+    def __init__(self, venv, base_table: dict, scales: dict, feature_set: str = "v1"):
         self.reader = ObsReader(venv.envs[0])
+        self.extra = FEATURE_SETS[_check_feature_set(feature_set)]
+        for c in self.extra:
+            if not self.reader.has(c):
+                raise KeyError(f"ARS feature set {feature_set!r} needs observation channel {c!r}; "
+                               f"the environment observes {self.reader.names}")
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales
 
     def ch(self, obs, name):
         return self.reader.batch(obs, name)
+
+    def ch_first(self, obs, name):
+        """The first entry of a (possibly vector) channel for a batch, as :func:`_extra_single` row by row."""
+        sl, scale, _vec = self.reader._slices[name]
+        return np.asarray(obs)[:, sl.start].astype(float) * scale
 
     def set_seas(self, seas):
         from .classical import DEFAULT_ALONG_GAINS
@@ -171,7 +219,9 @@ class _Batch:
             self.hist[:, :, 0] = h
         lagged = self.hist[:, :, list(LAG_STEPS)].reshape(n, -1)
         inst = np.stack([self.ch(obs, c) / self.scales[c] for c in INSTANT_CHANNELS], axis=1)
-        return np.concatenate([lagged, inst, np.ones((n, 1))], axis=1)
+        extra = np.stack([(self.ch_first(obs, c) - EXTRA_SCALES[c][0]) / EXTRA_SCALES[c][1] for c in self.extra],
+                         axis=1) if self.extra else np.zeros((n, 0))
+        return np.concatenate([lagged, inst, extra, np.ones((n, 1))], axis=1)
 
 
 def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0):
@@ -206,7 +256,8 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
 # ============================================================================ training
 def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, directions: int = 8, top: int = 4,
           nu: float = 0.001, alpha: float = 0.0007, pitch_weight: float = 0.5, episode_seconds: float = 180.0,
-          fail_penalty: float = 1.0, progress: bool = True, log=print) -> ARSPolicy:
+          fail_penalty: float = 1.0, progress: bool = True, log=print,
+          feature_set: str = DEFAULT_FEATURE_SET) -> ARSPolicy:
     """ARS V1-t (module docstring) on the 12 evaluation (Hs, Tp, heading) entries with training wave seeds; one
     search per sea state of the along-cable table, sharing one batched rollout per iteration. Reward of an
     episode: −[ln(σ_h/σ_h,along) + pitch_weight · ln(σ_θ/σ_θ,along)] on the same waves. Stops after
@@ -230,13 +281,14 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
     n_copies = n_pert + 2 * len(ev)
     venv = WinchPayoutVectorEnv(num_envs=n_copies, autoreset_mode="NextStep", batch_infos=True,
                                 episode_seconds=float(episode_seconds))
-    batch = _Batch(venv, table, dict(FEATURE_SCALES))
+    batch = _Batch(venv, table, dict(FEATURE_SCALES), feature_set)
+    NF = n_features(feature_set)
     rng = np.random.default_rng(int(seed))
-    theta = np.zeros((C, N_FEATURES))
+    theta = np.zeros((C, NF))
     curve = []
     log(f"[ars] seed {seed}: {C} sea states x {K} directions x 2 signs + 2 x {len(ev)} reference episodes = "
         f"{n_copies} copies of {episode_seconds:g} s per iteration; nu={nu} alpha={alpha} top={top} "
-        f"pitch_weight={pitch_weight}; {N_FEATURES} features per sea state")
+        f"pitch_weight={pitch_weight}; {NF} features per sea state (feature set {feature_set})")
     it = 0
     last = 0.0
     while it < max_iterations:
@@ -244,7 +296,7 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
         if elapsed + last > 60.0 * minutes:
             break
         t0 = time.perf_counter()
-        delta = rng.standard_normal((C, K, N_FEATURES))
+        delta = rng.standard_normal((C, K, NF))
         seas, seeds, th, owner = [], [], [], []
         for ci, k in enumerate(keys):
             for d in range(K):
@@ -259,7 +311,7 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
                 ci = keys.index(nearest_key(table, sea))
                 seas.append(sea)
                 seeds.append(_train_seed(s, it, seed))
-                th.append(theta[ci] if which == "theta" else np.zeros(N_FEATURES))
+                th.append(theta[ci] if which == "theta" else np.zeros(NF))
         sh, sp = rollout_batch(venv, batch, seas, seeds, np.array(th))
         cur_h, base_h = sh[n_pert:n_pert + len(ev)], sh[n_pert + len(ev):]
         cur_p, base_p = sp[n_pert:n_pert + len(ev)], sp[n_pert + len(ev):]
@@ -292,7 +344,8 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
     steps_per_episode = int(venv.envs[0].max_steps)
     venv.close()
     wall = time.perf_counter() - t_start
-    meta = {"algo": "ars", "env_id": ENV_ID, "env_kwargs": {}, "seed": int(seed), "iterations": it,
+    meta = {"algo": "ars", "env_id": ENV_ID, "env_kwargs": {}, "feature_set": feature_set, "seed": int(seed),
+            "iterations": it,
             "num_timesteps": it * n_copies * steps_per_episode, "wall_seconds": wall,
             "wall_seconds_this_session": round(wall),
             "hyperparameters": {"directions": K, "top": top, "nu": nu, "alpha": alpha, "pitch_weight": pitch_weight,
@@ -300,7 +353,8 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
                                 "max_iterations": max_iterations, "fail_penalty": fail_penalty},
             "train_seeds": f"1000*code + j + {TRAIN_SEED_OFFSET} + 100*iteration + 100000*{int(seed)}",
             "curve": curve}
-    return ARSPolicy({k: theta[ci] for ci, k in enumerate(keys)}, table, FEATURE_SCALES, meta, name=f"ars_s{seed}")
+    return ARSPolicy({k: theta[ci] for ci, k in enumerate(keys)}, table, FEATURE_SCALES, meta, name=f"ars_s{seed}",
+                     feature_set=feature_set)
 
 
 # ============================================================================ files
@@ -308,15 +362,24 @@ def save_policy(policy: ARSPolicy, path: str | Path) -> Path:
     """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON),
     atomically."""
     from .common import save_ars_file
-    meta = dict(policy.meta) | {"features": feature_names(), "lag_steps": list(LAG_STEPS),
-                                "history_channels": list(HISTORY_CHANNELS), "instant_channels": list(INSTANT_CHANNELS)}
+    fs = policy.feature_set
+    meta = dict(policy.meta) | {"feature_set": fs, "features": feature_names(fs), "lag_steps": list(LAG_STEPS),
+                                "history_channels": list(HISTORY_CHANNELS),
+                                "instant_channels": list(INSTANT_CHANNELS) + list(FEATURE_SETS[fs])}
+    if fs != "v1":
+        meta["extra_scales"] = {c: list(EXTRA_SCALES[c]) for c in FEATURE_SETS[fs]}
     return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta)
 
 
 def load_ars_policy(path: str | Path) -> ARSPolicy:
     """Read a policy written by :func:`save_policy` (bind it to an environment before use)."""
     from .common import read_ars_file
-    theta, table, scales, meta = read_ars_file(path, feature_names(), {"env_id": ENV_ID, "algo": "ars"},
+    def names_for(meta):
+        fs = meta.get("feature_set", "v1")
+        if fs not in FEATURE_SETS:
+            raise ValueError(f"{path}: unknown ARS feature set {fs!r} (this version knows {sorted(FEATURE_SETS)})")
+        return feature_names(fs)
+    theta, table, scales, meta = read_ars_file(path, names_for, {"env_id": ENV_ID, "algo": "ars"},
                                                "an ARS along-cable-residual policy")
     return ARSPolicy(theta, table, scales, meta, name=Path(path).stem)
 
@@ -335,6 +398,9 @@ def main(argv=None) -> int:
     ap.add_argument("--alpha", type=float, default=0.0007, help="step size")
     ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
     ap.add_argument("--episode-seconds", type=float, default=180.0)
+    ap.add_argument("--features", choices=sorted(FEATURE_SETS), default=DEFAULT_FEATURE_SET,
+                    help=f"feature set (default {DEFAULT_FEATURE_SET}; v1 is the set of the policies committed "
+                         "before 2026-12-03)")
     ap.add_argument("--export", default=None, help="policy file (default runs/ars_WinchPayout-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
     for name in ("minutes", "nu", "alpha", "episode_seconds"):
@@ -347,7 +413,7 @@ def main(argv=None) -> int:
         ap.error("--episode-seconds must be >= 120 (the score starts at 60 s)")
     out = Path(a.export or f"runs/ars_WinchPayout-v0_s{a.seed}.npz")
     pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
-                a.episode_seconds)
+                a.episode_seconds, feature_set=a.features)
     save_policy(pol, out)
     print(f"[ars] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
     return 0

@@ -133,7 +133,7 @@ def save_ars_file(path, theta: dict, base_table: dict, scales: dict, meta: dict)
 def read_ars_file(path, feature_names: list, expect: dict | None = None, what: str = "this kind of ARS policy"):
     """Read an ARS policy file: (theta per key, base table, scales, meta). ValueError naming the file if it is not
     one, if its metadata differ from ``expect`` (e.g. env_id, algo: then it is not ``what``), or if its features
-    differ from ``feature_names``."""
+    differ from ``feature_names`` (a list, or a callable of the metadata giving it)."""
     import json
     from pathlib import Path
     import zipfile
@@ -156,6 +156,8 @@ def read_ars_file(path, feature_names: list, expect: dict | None = None, what: s
         for k, v in (expect or {}).items():
             if meta.get(k) != v:
                 raise ValueError(f"{path}: not {what} (its {k} is {meta.get(k)!r}, not {v!r})")
+        if callable(feature_names):
+            feature_names = feature_names(meta)
         if meta.get("features") != list(feature_names):
             raise ValueError(f"{path}: its features differ from this version's ({len(meta.get('features', []))} "
                              f"against {len(feature_names)})")

@@ -126,8 +126,11 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             pol.bind_env(penv)
         desc = f"{meta.get('algo', '?').upper()} policy"
         if meta.get("algo") == "ars":
-            desc += (", linear residual on `along_cable` over the MRU along-cable history "
-                     f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
+            fs = meta.get("feature_set", "v1")
+            more = ("" if fs == "v1" else " and the winch speed, last action, top tension, cable angle, fish pitch "
+                    "and pitch rate")
+            desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
+                     f"{meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
         elif meta.get("algo") == "ars_skyhook":
             desc = ("ARS policy, linear residual on `skyhook` over the tow-point heave history and stroke features "
                     f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")

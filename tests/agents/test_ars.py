@@ -24,12 +24,12 @@ SECONDS = 30.0
 DISCARD = 10.0
 
 
-def _policy(scale=0.02, seed=0):
+def _policy(scale=0.02, seed=0, feature_set="v1"):
     """An ARS policy with random (small) weights on the tuned along-cable table."""
     table = load_tuned()["along_cable"]
     rng = np.random.default_rng(seed)
-    theta = {k: rng.normal(0.0, scale, ars.N_FEATURES) for k in table}
-    return ars.ARSPolicy(theta, table, meta={"seed": seed, "iterations": 0})
+    theta = {k: rng.normal(0.0, scale, ars.n_features(feature_set)) for k in table}
+    return ars.ARSPolicy(theta, table, meta={"seed": seed, "iterations": 0}, feature_set=feature_set)
 
 
 @pytest.fixture(scope="module")
@@ -48,16 +48,18 @@ def test_zero_weights_are_the_along_cable_law(env):
     assert np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
 
 
-def test_single_env_policy_equals_the_batched_training_rollout(env):
-    """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off."""
+@pytest.mark.parametrize("feature_set", ["v1", "v2"])
+def test_single_env_policy_equals_the_batched_training_rollout(env, feature_set):
+    """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off (both
+    feature sets: v2 adds winch speed, last action, top tension, cable angle, fish pitch and its rate)."""
     from towenv.envs.vector import WinchPayoutVectorEnv
-    pol = _policy(scale=0.02).bind_env(env)
+    pol = _policy(scale=0.02, feature_set=feature_set).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
     picks = [0, 6, 11]                                  # one entry per sea state
     seas = [ev[i][0] for i in picks]
     seeds = [ev[i][1] + 123456 for i in picks]
     venv = WinchPayoutVectorEnv(num_envs=3, autoreset_mode="NextStep", batch_infos=True, episode_seconds=SECONDS)
-    batch = ars._Batch(venv, pol.base_table, pol.scales)
+    batch = ars._Batch(venv, pol.base_table, pol.scales, feature_set)
     theta = np.array([pol.theta[nearest_key(pol.theta, s)] for s in seas])
     sh, sp = ars.rollout_batch(venv, batch, seas, seeds, theta, discard=DISCARD)
     venv.close()
@@ -68,6 +70,29 @@ def test_single_env_policy_equals_the_batched_training_rollout(env):
     # and the weights matter: the residual changes the heave
     al = episode_metrics(rollout(env, make_baseline("along_cable", env), seas[1], seeds[1]), DISCARD)
     assert abs(al["rms_heave"] - sh[1]) > 1e-6
+
+
+def test_v2_features_are_the_observed_channels(env):
+    """Each v2 extra feature is (channel − offset)/scale of the observation the policy was handed, in the
+    channel's physical unit; the v1 block in front of them is the v1 feature vector unchanged."""
+    from agents.common import ObsReader
+    reader = ObsReader(env)
+    sea, seed = env.unwrapped.eval_sea_states()[4]
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    for _ in range(25):
+        obs, *_ = env.step(np.array([0.4], np.float32))
+    phi1, _ = ars.features_single(reader, obs, ars.FEATURE_SCALES, None, "v1")
+    phi2, _ = ars.features_single(reader, obs, ars.FEATURE_SCALES, None, "v2")
+    extra = ars.FEATURE_SETS["v2"]
+    assert len(phi2) == len(phi1) + len(extra) == ars.n_features("v2")
+    assert np.array_equal(phi2[:len(phi1) - 1], phi1[:-1]) and phi2[-1] == phi1[-1] == 1.0
+    names = ars.feature_names("v2")
+    for c in extra:
+        off, sc = ars.EXTRA_SCALES[c]
+        x = phi2[names.index(c)] * sc + off
+        assert x == pytest.approx(float(np.asarray(reader(obs, c)).reshape(-1)[0]), rel=1e-12, abs=1e-12)
+    # and last_action is the action handed to the last step (float32 round-off)
+    assert phi2[names.index("last_action")] * ars.EXTRA_SCALES["last_action"][1] == pytest.approx(0.4, abs=1e-6)
 
 
 def test_policy_is_causal(env):
@@ -99,10 +124,12 @@ def test_policy_is_causal(env):
     other.close()
 
 
-def test_policy_file_round_trip_and_refusal(tmp_path, env):
-    pol = _policy(scale=0.01, seed=3)
+@pytest.mark.parametrize("feature_set", ["v1", "v2"])
+def test_policy_file_round_trip_and_refusal(tmp_path, env, feature_set):
+    pol = _policy(scale=0.01, seed=3, feature_set=feature_set)
     f = ars.save_policy(pol, tmp_path / "p.npz")
     back = ars.load_ars_policy(f)
+    assert back.feature_set == feature_set
     assert sorted(back.theta) == sorted(pol.theta)
     assert all(np.array_equal(back.theta[k], pol.theta[k]) for k in pol.theta)
     assert back.base_table == json.loads(json.dumps(pol.base_table))
@@ -120,6 +147,21 @@ def test_policy_file_round_trip_and_refusal(tmp_path, env):
             ars.load_ars_policy(tmp_path / bad)
     with pytest.raises(RuntimeError, match="bind_env"):
         _policy().predict(np.zeros(env.observation_space.shape, np.float32))
+    with pytest.raises(ValueError, match="feature set"):
+        ars.ARSPolicy({"hs0.88_tp4.03": np.zeros(ars.n_features("v1"))}, pol.base_table, feature_set="v2")
+    with pytest.raises(ValueError, match="feature_set must be one of"):
+        _policy(feature_set="v9")
+
+
+def test_committed_v1_policies_still_load():
+    """Files written before feature sets existed (no ``feature_set`` entry) load as v1 with their 37 weights."""
+    from pathlib import Path
+    import agents
+    for f in sorted((Path(agents.__file__).parent / "trained").glob("ars_WinchPayout-v0_s*.npz")):
+        meta = json.loads(str(np.load(f)["meta"]))
+        pol = ars.load_ars_policy(f)
+        assert pol.feature_set == meta.get("feature_set", "v1")
+        assert all(v.shape == (ars.n_features(pol.feature_set),) for v in pol.theta.values())
 
 
 def test_training_smoke_on_the_batched_env():
