@@ -240,7 +240,7 @@ class ARSCompensatorPolicy:
         self.base = SkyhookCompensator(env, table=self.base_table)
         self.reader = self.base.reader
         self.u = env.unwrapped
-        self._feat = _Features(self.reader, self.u._half_stroke, self.scales)
+        self._feat = _Features(self.reader, self.u.half_stroke, self.scales)
         self._th = None
         return self
 
@@ -288,7 +288,7 @@ class _Batch:
         self.reader = ObsReader(e0)
         self.kmap, self.bmap = e0.stiffness_range, e0.damping_range
         self.table = base_table
-        self.features = _Features(self.reader, e0._half_stroke, scales)
+        self.features = _Features(self.reader, e0.half_stroke, scales)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS

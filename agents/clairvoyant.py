@@ -62,7 +62,7 @@ def _episode(env, sea, seed, commands, apply):
         y[k] = info["fish_heave"]
         d_al[k] = m["tow_disp_along"]
         tz[k] = m["tow_heave"]
-        p[k] = m["winch_length_dev"] if "winch_length_dev" in m else m["comp_stroke"] * u._half_stroke
+        p[k] = m["winch_length_dev"] if "winch_length_dev" in m else m["comp_stroke"] * u.half_stroke
         slack[k] = info["slack"]
         if term or (trunc and k < n - 1):
             ok = False
@@ -218,7 +218,7 @@ def plan_episode(env, sea, seed, kind: str, h, iterations: int = 8, discard: flo
         limits = (margin * env.winch_travel, margin * env.winch_max_speed * DT, margin * env.winch_max_acceleration * DT * DT)
         apply = _apply_winch
     else:
-        limits = (margin * env._half_stroke, None, None)
+        limits = (margin * env.half_stroke, None, None)
         apply = _apply_stroke
     hc = _coarse_fir(h, D)
 
@@ -303,7 +303,8 @@ class _Clairvoyant(Baseline):
         import json
         u = self.u
         cfg = {k: repr(getattr(u, k, None)) for k in ("physics_dt", "dt", "max_steps", "winch_max_speed",
-                                                      "winch_max_acceleration", "winch_travel", "_half_stroke")}
+                                                      "winch_max_acceleration", "winch_travel",
+                                                      "_half_stroke")}    # the private name keeps cached plans' keys
         cfg.update(scene=repr(u.base_scene.model_dump() if hasattr(u.base_scene, "model_dump") else u.base_scene),
                    sea=repr(sea), seed=int(seed), kind=self.KIND, iterations=self.iterations,
                    fir=self.fir_seconds, version=PLAN_VERSION)
@@ -368,4 +369,4 @@ class ClairvoyantActiveCompensator(_Clairvoyant):
 
     def describe(self):
         return (f"clairvoyant ACTIVE compensator (bound on every semi-active law): stroke trajectory optimised on the "
-                f"simulator with perfect foresight within the same ±{self.u._half_stroke:g} m stroke")
+                f"simulator with perfect foresight within the same ±{self.u.half_stroke:g} m stroke")

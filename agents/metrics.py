@@ -90,7 +90,7 @@ def rollout(env, policy, sea, sea_seed: int, seed: int | None = None, max_steps:
     hits = 0
     rec = EpisodeRecord(kind, sea, int(sea_seed), float(u.dt))
     if kind == "compensator":
-        rec.half_stroke = float(u._half_stroke) if hasattr(u, "_half_stroke") else 0.5 * float(sim.scene.compensator.stroke)
+        rec.half_stroke = float(u.half_stroke) if hasattr(u, "half_stroke") else 0.5 * float(sim.scene.compensator.stroke)
         L0 = None
     else:
         rec.winch_travel = float(getattr(u, "winch_travel", 10.0))

@@ -310,7 +310,7 @@ def test_compensator_classes_set_stroke_and_mass():
     u = env.unwrapped
     env.reset(seed=0)
     c = u.sim.scene.compensator
-    assert (c.stroke, c.mass) == (4.0, 530.0) and u._half_stroke == 2.0
+    assert (c.stroke, c.mass) == (4.0, 530.0) and u.half_stroke == 2.0 == 0.5 * c.stroke
     assert u.sim.comp[K.C_SMAX] - u.sim.comp[K.C_SMIN] == pytest.approx(4.0)
     assert gym.make(COMP).unwrapped.sim.scene.compensator.stroke == COMPENSATOR_CLASSES["sheave_2m"]["stroke"]
     with pytest.raises(ValueError, match="compensator_class"):

@@ -116,6 +116,11 @@ class CompensatorGainsEnv(TowEnv):
         """The action → damping map, as :attr:`stiffness_range` (N s/m)."""
         return self._b_map
 
+    @property
+    def half_stroke(self) -> float:
+        """Half the compensator's stroke (m): the stroke runs ±half_stroke about mid-stroke, the end stops beyond."""
+        return self._half_stroke
+
     def gains(self, action) -> tuple[float, float]:
         """(stiffness N/m, damping N s/m) of an action in [-1, 1]²."""
         a0, a1 = (min(max(float(x), -1.0), 1.0) for x in np.asarray(action, float).reshape(2))
