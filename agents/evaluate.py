@@ -21,6 +21,10 @@ Hygiene:
     + 100 r, the set the policies were selected on.
   * policies named <family>_s<k> / <family>_seed<k> form a seed group; with two or more members the
     report gets a section "Across training seeds" (IQM and stratified-bootstrap CIs, agents/aggregate.py).
+  * --reuse clairvoyant=REPORT_DIR takes a baseline's per-episode rows from an earlier report instead of
+    running it (the clairvoyant winch plans cost ~2 min per episode): refused (exit 2) unless that report
+    holds the same episodes and start-up window and every controller both runs share agrees with it in
+    every episode (RMS heave to 1e-5 relative; metrics.csv keeps 6 digits); the report says so.
 
 Examples::
 
@@ -106,6 +110,10 @@ def parse_args(argv=None):
     p.add_argument("--no-plots", action="store_true")
     p.add_argument("--boot", type=int, default=2000, help="bootstrap resamples")
     p.add_argument("--tuned", default=None, help="tuned-baseline YAML (default agents/hyperparams/baselines.yml)")
+    p.add_argument("--reuse", nargs="*", default=[], metavar="BASELINE=REPORT_DIR",
+                   help="take a baseline's per-episode rows from an earlier report of the same episodes instead of "
+                        "running it (e.g. clairvoyant=docs/reports/ars_WinchPayout-v0: its plans cost ~2 min per "
+                        "episode); refused unless the controllers both runs share agree in every episode")
     args = p.parse_args(argv)
     if args.replicates < 1:
         p.error(f"--replicates must be ≥ 1 (got {args.replicates})")
@@ -113,6 +121,15 @@ def parse_args(argv=None):
         p.error(f"--boot must be ≥ 1 (got {args.boot})")
     if args.discard is not None and not args.discard >= 0:
         p.error(f"--discard must be ≥ 0 (got {args.discard})")
+    reuse = {}
+    for item in args.reuse:
+        name, sep, folder = item.partition("=")
+        if not sep or not name or not folder:
+            p.error(f"--reuse takes BASELINE=REPORT_DIR (got {item!r})")
+        if not (Path(folder) / "summary.json").is_file() or not (Path(folder) / "metrics.csv").is_file():
+            p.error(f"--reuse {name}: {folder} is not a report folder (no summary.json and metrics.csv)")
+        reuse[name] = folder
+    args.reuse = reuse
     if args.name is not None and (not args.name or args.name in (".", "..") or "/" in args.name
                                   or os.sep in args.name):
         p.error(f"--name must be a plain folder name (got {args.name!r})")
@@ -308,11 +325,21 @@ def main(argv=None):
     offset = SEED_SETS[args.seed_set]
     kw = dict(baselines=baselines, env_kwargs=base_kwargs, replicates=args.replicates, indices=idx,
               discard=args.discard, n_boot=args.boot, tuned=tuned)
-    if "seed_offset" in inspect.signature(run_evaluation).parameters:
-        res = run_evaluation(env_id, trained, seed_offset=offset, **kw)
-    else:
-        with _seed_offset(offset):
-            res = run_evaluation(env_id, trained, **kw)
+    if args.reuse:
+        kw["reuse"] = args.reuse
+        bad = [n for n in args.reuse if n not in (baselines if baselines is not None else baseline_names(kind))]
+        if bad:
+            _fail(f"--reuse: {', '.join(bad)} not among this run's baselines")
+    try:
+        if "seed_offset" in inspect.signature(run_evaluation).parameters:
+            res = run_evaluation(env_id, trained, seed_offset=offset, **kw)
+        else:
+            with _seed_offset(offset):
+                res = run_evaluation(env_id, trained, **kw)
+    except ValueError as e:
+        if not str(e).startswith("--reuse"):
+            raise
+        _fail(str(e))
     expect = episode_seeds([base[i] for i in idx], args.seed_set, args.replicates)
     got = [int(e[3]) for e in res.episodes]
     if got != expect:       # the episode list is not what this script promises: do not write a report

@@ -19,7 +19,8 @@ from .baselines import REFERENCE, baseline_names, load_tuned, make_baseline
 from .common import env_kind, sea_key, sea_label
 from .metrics import bootstrap_mean_ci, default_discard, episode_metrics, paired_reduction_ci, rollout
 
-__all__ = ["Controller", "EvalResult", "eval_episodes", "make_eval_env", "run_evaluation", "GOALS"]
+__all__ = ["Controller", "EvalResult", "eval_episodes", "make_eval_env", "run_evaluation", "GOALS", "read_report_rows",
+           "REUSE_REL_TOL"]
 
 #: physics-relevant keywords that must agree between a policy's environment and the baselines'
 _PHYSICS_KEYS = ("scene", "scene_overrides", "control_hz", "dt", "winch_max_speed", "winch_max_acceleration",
@@ -60,6 +61,65 @@ def eval_episodes(env, replicates: int = 1, indices=None, seed_offset: int = 0):
     return out
 
 
+#: relative agreement required, per episode, between a controller's RMS heave in this run and in the report whose
+#: rows are reused: metrics.csv stores 6 significant digits (rounding error ≤ 5e-6 relative), so 1e-5 passes a
+#: re-run of the same physics and refuses any change of the episodes' outcome beyond the file's precision
+REUSE_REL_TOL = 1e-5
+#: metrics.csv columns that identify an episode (not metrics) or are recomputed (compensation ratios)
+_ID_COLUMNS = ("controller", "episode", "sea_state", "heading_deg", "wave_seed")
+_RECOMPUTED = ("cr_heave", "cr_heave_sp", "cr_pitch")
+
+
+def read_report_rows(report_dir) -> tuple[dict, dict]:
+    """A written report's ``summary.json`` and its per-episode rows: ``(summary, {controller: [(sea_key,
+    heading_deg, wave_seed, {metric: value}), ...]})`` in episode order. ValueError naming the folder if it is not
+    a complete report."""
+    import csv
+    import json
+    from pathlib import Path
+    d = Path(report_dir)
+    if not (d / "summary.json").is_file() or not (d / "metrics.csv").is_file():
+        raise ValueError(f"{d}: not a complete report folder (needs summary.json and metrics.csv)")
+    try:
+        summary = json.loads((d / "summary.json").read_text())
+        rows: dict[str, list] = {}
+        with open(d / "metrics.csv", newline="") as f:
+            for r in csv.DictReader(f):
+                m = {k: float(v) for k, v in r.items() if k not in _ID_COLUMNS and k not in _RECOMPUTED}
+                rows.setdefault(r["controller"], []).append(
+                    (int(r["episode"]), r["sea_state"], float(r["heading_deg"]), int(r["wave_seed"]), m))
+    except (ValueError, KeyError, TypeError, OSError) as exc:
+        raise ValueError(f"{d}: unreadable report ({type(exc).__name__}: {exc})") from None
+    out = {}
+    for n, rs in rows.items():
+        rs.sort(key=lambda t: t[0])
+        if [t[0] for t in rs] != list(range(len(rs))):
+            raise ValueError(f"{d}: metrics.csv has a gap in {n}'s episodes")
+        out[n] = [t[1:] for t in rs]
+    return summary, out
+
+
+def _reused_rows(name: str, report_dir, env_id: str, episodes, discard: float):
+    """The rows of controller ``name`` from ``report_dir`` for exactly these ``episodes`` (same sea state, heading
+    and wave seed, in order) and this start-up window; ValueError naming what differs. Returns (rows, all rows)."""
+    summary, rows = read_report_rows(report_dir)
+    if summary.get("env_id") != env_id:
+        raise ValueError(f"--reuse {name}: {report_dir} is a report of {summary.get('env_id')!r}, not {env_id!r}")
+    if name not in rows:
+        raise ValueError(f"--reuse {name}: {report_dir} has no rows of {name!r} (it has {', '.join(sorted(rows))})")
+    if abs(float(summary.get("discard", math.nan)) - float(discard)) > 1e-9:
+        raise ValueError(f"--reuse {name}: {report_dir} scored after {summary.get('discard')} s, this run after "
+                         f"{discard:g} s")
+    mine = rows[name]
+    if len(mine) != len(episodes):
+        raise ValueError(f"--reuse {name}: {report_dir} has {len(mine)} episodes, this run {len(episodes)}")
+    for i, ((g, _lab, sea, seed), (g0, head0, seed0, _m)) in enumerate(zip(episodes, mine)):
+        if g != g0 or int(seed) != seed0 or abs(float(sea.heading_deg) - head0) > 1e-9:
+            raise ValueError(f"--reuse {name}: episode {i} differs: this run {g}, heading {sea.heading_deg:g}, wave "
+                             f"seed {seed}; {report_dir}: {g0}, heading {head0:g}, wave seed {seed0}")
+    return [dict(m) for *_x, m in mine], rows
+
+
 @dataclass
 class EvalResult:
     env_id: str
@@ -74,6 +134,7 @@ class EvalResult:
     wall_seconds: float
     summary: dict = field(default_factory=dict)     # name -> group -> metric -> (mean, lo, hi)
     goals: list = field(default_factory=list)
+    reused: dict = field(default_factory=dict)      # name -> reuse check (agents.evaluation.run_evaluation)
 
     @property
     def groups(self):
@@ -98,8 +159,14 @@ GOALS = {
 def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines: list[str] | None = None,
                    env_kwargs: dict | None = None, replicates: int = 1, indices=None, discard: float | None = None,
                    keep_records: str = "first", n_boot: int = 2000, tuned: dict | None = None,
-                   progress: bool = True, seed_offset: int = 0) -> EvalResult:
+                   progress: bool = True, seed_offset: int = 0, reuse: dict | None = None) -> EvalResult:
     """Evaluate ``trained`` policies ``[(name, SB3Policy-like, meta)]`` and the ``baselines``.
+
+    ``reuse`` ``{baseline name: report folder}``: that baseline is not run; its per-episode metrics are read from
+    the earlier report (``metrics.csv``), which must hold the same episodes and start-up window, and every other
+    controller the two runs share must agree per episode to :data:`REUSE_REL_TOL` in RMS heave (at least one
+    must be shared) — so the rows belong to the same physics. For the clairvoyant winch, whose plans cost ~2 min
+    per episode.
 
     The baselines run on ``gym.make(env_id, **env_kwargs)``; each trained policy on its own environment
     made from its metadata's keywords and wrappers (with ``env_kwargs`` on top), so that its observation
@@ -144,12 +211,22 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
                     else:
                         desc += f", wrapper {wn}"
         ctrls.append(Controller(name, pol, penv, "trained", desc, meta))
+    reuse = dict(reuse or {})
+    unknown = [n for n in reuse if n not in names]
+    if unknown:
+        raise ValueError(f"--reuse: {', '.join(unknown)} not among the baselines of this run ({', '.join(names)})")
     for n in names:
         b = make_baseline(n, base_env, tuned)
-        ctrls.append(Controller(n, b, base_env, "baseline", b.describe()))
+        desc = b.describe()
+        if n in reuse:
+            desc += f" — rows reused from the report {reuse[n]} (not re-run; see the reuse check)"
+        ctrls.append(Controller(n, b, base_env, "baseline", desc))
     episodes = eval_episodes(base_env, replicates, indices, seed_offset)
     u = base_env.unwrapped
     discard = default_discard(u.episode_seconds) if discard is None else float(discard)
+    reused, old_rows = {}, {}
+    for n, folder in reuse.items():
+        reused[n], old_rows[n] = _reused_rows(n, folder, env_id, episodes, discard)
     metrics: dict[str, list] = {c.name: [] for c in ctrls}
     records: dict[str, dict] = {c.name: {} for c in ctrls}
     first_of_group = {}
@@ -158,6 +235,11 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
     keep = set(first_of_group.values()) if keep_records == "first" else set(range(len(episodes)))
     for c in ctrls:
         tc = time.time()
+        if c.name in reused:
+            metrics[c.name] = reused[c.name]
+            if progress:
+                print(f"[evaluate] {c.name:>18s}: {len(episodes)} episodes reused from {reuse[c.name]}", flush=True)
+            continue
         for i, (g, lab, sea, seed) in enumerate(episodes):
             rec = rollout(c.env, c.policy, sea, seed)
             metrics[c.name].append(episode_metrics(rec, discard))
@@ -167,6 +249,25 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             sh = np.mean([m["sig_heave"] for m in metrics[c.name]])
             print(f"[evaluate] {c.name:>18s}: {len(episodes)} episodes, mean significant heave {sh:.3f} m "
                   f"({time.time() - tc:.0f} s)", flush=True)
+    checks = {}
+    for n, rows in old_rows.items():          # the reused rows belong to the same physics: shared controllers agree
+        shared = [c.name for c in ctrls if c.name in rows and c.name not in reused]
+        if not shared:
+            raise ValueError(f"--reuse {n}: {reuse[n]} shares no controller with this run to check it against")
+        worst = 0.0
+        for name in shared:
+            for i, (m, (*_x, m0)) in enumerate(zip(metrics[name], rows[name])):
+                a, b = float(m["rms_heave"]), float(m0["rms_heave"])
+                d = abs(a - b) / max(abs(a), 1e-12)
+                if not d <= REUSE_REL_TOL:
+                    raise ValueError(f"--reuse {n}: {name}'s RMS heave in episode {i} is {a:.6g} m here and {b:.6g} m "
+                                     f"in {reuse[n]} (relative difference {d:.1e} > {REUSE_REL_TOL:g}): not the same "
+                                     f"physics or episodes; re-run {n}")
+                worst = max(worst, d)
+        checks[n] = {"from": str(reuse[n]), "checked_against": shared, "max_rel_diff": worst}
+        if progress:
+            print(f"[evaluate] reuse check for {n}: {', '.join(shared)} agree with {reuse[n]} in every episode "
+                  f"(RMS heave, largest relative difference {worst:.1e})", flush=True)
     # compensation ratios against the reference (same episode)
     for c in ctrls:
         for m, r in zip(metrics[c.name], metrics[ref]):
@@ -174,6 +275,7 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             m["cr_heave_sp"] = 1.0 - m["rms_heave_sp"] / max(r["rms_heave_sp"], 1e-12)
             m["cr_pitch"] = 1.0 - m["rms_pitch_deg"] / max(r["rms_pitch_deg"], 1e-12)
     res = EvalResult(env_id, kind, env_kwargs, episodes, ctrls, metrics, records, ref, discard, 0.0)
+    res.reused = checks
     res.summary = summarize(res, n_boot)
     res.goals = assess_goals(res, n_boot)
     for c in ctrls:

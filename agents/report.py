@@ -283,6 +283,13 @@ def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str 
         acts = getattr(c.policy, "acts_on", "observations")
         rows.append([f"`{c.name}`", c.kind, acts, (c.description + ("; " + extra if extra else "")).replace("|", "/")])
     L += _table(["name", "kind", "acts on", "description"], rows) + [""]
+    for n, chk in (getattr(res, "reused", None) or {}).items():
+        L += [f"**Reused rows.** `{n}` was not run for this report: its per-episode metrics are those of the report "
+              f"`{chk['from']}` (same episodes, wave seeds and start-up window). Reuse check: "
+              + ", ".join(f"`{x}`" for x in chk["checked_against"])
+              + f" ran here and agree with that report in every episode (RMS heave, largest relative difference "
+                f"{chk['max_rel_diff']:.1e}; metrics.csv keeps 6 significant digits). No time series of `{n}` is "
+                f"plotted.", ""]
 
     # ---- main table per sea state
     L += ["## Fish motion per sea state", ""]
@@ -478,6 +485,7 @@ def _summary_json(res: EvalResult, seed_set: str | None = None, across_seeds: li
     return json.dumps({"env_id": res.env_id, "discard": res.discard, "reference": res.reference,
                        "n_episodes": n_ep, "min_verdict_episodes": MIN_VERDICT_EPISODES, "seed_set": seed_set,
                        "wave_seeds": [int(e[3]) for e in res.episodes], "controllers": meta, "goals": goals,
+                       "reused": _jsonable(getattr(res, "reused", None) or {}),
                        "across_seeds": _jsonable(across_seeds or []), "summary": summ}, indent=1, default=str)
 
 

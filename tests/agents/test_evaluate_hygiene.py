@@ -345,3 +345,55 @@ def test_report_writer_failure_keeps_previous_report(tmp_path, monkeypatch):
     monkeypatch.undo()
     report.write_report(res, out, "fourth", plots=False)                   # no --html: the stale html goes
     assert not (out / "report.html").exists() and "# fourth" in (out / "report.md").read_text()
+
+
+# ------------------------------------------------------------------------------------------ --reuse
+def test_reuse_takes_rows_only_from_a_report_of_the_same_physics(tmp_path, evaluate, monkeypatch, capsys):
+    """--reuse BASELINE=DIR: the baseline is not run, its rows are the earlier report's; refused (exit 2) when the
+    episodes differ or when a controller both runs share disagrees with the earlier report."""
+    import csv
+    monkeypatch.chdir(tmp_path)
+    quick = ["--env", WINCH, "--no-plots", "--env-kwargs", "episode_seconds:30", "--discard", "10"]
+    assert evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                          "--name", "a", *quick]) == 0
+    a = tmp_path / "runs" / "reports" / "a"
+    capsys.readouterr()
+    assert evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                          "--name", "b", "--reuse", f"along_cable={a}", *quick]) == 0
+    out = capsys.readouterr().out
+    assert "along_cable: 2 episodes reused from" in out and "reuse check for along_cable: fixed_winch agree" in out
+    b = tmp_path / "runs" / "reports" / "b"
+
+    def rows(folder, name):
+        with open(folder / "metrics.csv", newline="") as f:
+            return [r for r in csv.DictReader(f) if r["controller"] == name]
+    ra, rb = rows(a, "along_cable"), rows(b, "along_cable")
+    assert [r["rms_heave"] for r in ra] == [r["rms_heave"] for r in rb] and len(ra) == 2
+    assert json.loads((b / "summary.json").read_text())["reused"]["along_cable"]["checked_against"] == ["fixed_winch"]
+    assert "Reused rows" in (b / "report.md").read_text()
+    # other episodes: refused before anything is written
+    with pytest.raises(SystemExit) as ex:
+        evaluate.main(["along_cable", "--episodes", "1", "5", "--baselines", "fixed_winch", "along_cable",
+                       "--name", "c", "--reuse", f"along_cable={a}", *quick])
+    assert ex.value.code == 2 and "episode 0 differs" in capsys.readouterr().err
+    assert not (tmp_path / "runs" / "reports" / "c").exists()
+    # a tampered shared row (the reference ran on other physics): refused
+    text = (a / "metrics.csv").read_text().splitlines()
+    fw = next(i for i, line in enumerate(text) if line.startswith("fixed_winch,0,"))
+    hdr = text[0].split(",")
+    cells = text[fw].split(",")
+    k = hdr.index("rms_heave")
+    cells[k] = f"{float(cells[k]) * 1.001:.6g}"
+    text[fw] = ",".join(cells)
+    (a / "metrics.csv").write_text("\n".join(text) + "\n")
+    with pytest.raises(SystemExit) as ex:
+        evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                       "--name", "d", "--reuse", f"along_cable={a}", *quick])
+    assert ex.value.code == 2 and "not the same physics" in capsys.readouterr().err
+    # bad forms
+    for bad in (["--reuse", "along_cable"], ["--reuse", f"along_cable={tmp_path / 'nowhere'}"],
+                ["--reuse", f"pd_ff={a}"]):
+        with pytest.raises(SystemExit) as ex:
+            evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                           "--name", "e", *bad, *quick])
+        assert ex.value.code == 2
