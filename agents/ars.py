@@ -128,6 +128,10 @@ class ARSPolicy:
         self.env = env
         self.base = AlongCableWinch(env, table=self.base_table)
         self.reader = self.base.reader
+        missing = [c for c in FEATURE_SETS[self.feature_set] if not self.reader.has(c)]
+        if missing:
+            raise KeyError(f"ARSPolicy (feature set {self.feature_set!r}) needs observation channels {missing}; "
+                           f"the environment observes {self.reader.names}")
         self.u = env.unwrapped
         return self
 
@@ -378,6 +382,10 @@ def load_ars_policy(path: str | Path) -> ARSPolicy:
         fs = meta.get("feature_set", "v1")
         if fs not in FEATURE_SETS:
             raise ValueError(f"{path}: unknown ARS feature set {fs!r} (this version knows {sorted(FEATURE_SETS)})")
+        want = {c: list(EXTRA_SCALES[c]) for c in FEATURE_SETS[fs]}
+        if fs != "v1" and meta.get("extra_scales") != want:
+            raise ValueError(f"{path}: its feature scales {meta.get('extra_scales')} differ from this version's "
+                             f"{want} (the policy would see other features)")
         return feature_names(fs)
     theta, table, scales, meta = read_ars_file(path, names_for, {"env_id": ENV_ID, "algo": "ars"},
                                                "an ARS along-cable-residual policy")

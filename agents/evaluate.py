@@ -110,7 +110,7 @@ def parse_args(argv=None):
     p.add_argument("--no-plots", action="store_true")
     p.add_argument("--boot", type=int, default=2000, help="bootstrap resamples")
     p.add_argument("--tuned", default=None, help="tuned-baseline YAML (default agents/hyperparams/baselines.yml)")
-    p.add_argument("--reuse", nargs="*", default=[], metavar="BASELINE=REPORT_DIR",
+    p.add_argument("--reuse", action="append", default=[], metavar="BASELINE=REPORT_DIR",
                    help="take a baseline's per-episode rows from an earlier report of the same episodes instead of "
                         "running it (e.g. clairvoyant=docs/reports/ars_WinchPayout-v0: its plans cost ~2 min per "
                         "episode); refused unless the controllers both runs share agree in every episode")
@@ -238,7 +238,7 @@ def main(argv=None):
     from agents.aggregate import across_seeds, seed_groups
     from agents.baselines import BASELINES, baseline_names, load_tuned
     from agents.common import env_kind
-    from agents.evaluation import _PHYSICS_KEYS, make_eval_env, run_evaluation
+    from agents.evaluation import _PHYSICS_KEYS, ReuseError, make_eval_env, run_evaluation
     from agents.report import MIN_VERDICT_EPISODES, format_goal_value, verdict, write_report
     from agents.zoo import parse_env_kwargs
 
@@ -336,9 +336,7 @@ def main(argv=None):
         else:
             with _seed_offset(offset):
                 res = run_evaluation(env_id, trained, **kw)
-    except ValueError as e:
-        if not str(e).startswith("--reuse"):
-            raise
+    except ReuseError as e:
         _fail(str(e))
     expect = episode_seeds([base[i] for i in idx], args.seed_set, args.replicates)
     got = [int(e[3]) for e in res.episodes]

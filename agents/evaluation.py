@@ -20,7 +20,7 @@ from .common import env_kind, sea_key, sea_label
 from .metrics import bootstrap_mean_ci, default_discard, episode_metrics, paired_reduction_ci, rollout
 
 __all__ = ["Controller", "EvalResult", "eval_episodes", "make_eval_env", "run_evaluation", "GOALS", "read_report_rows",
-           "REUSE_REL_TOL"]
+           "REUSE_REL_TOL", "ReuseError"]
 
 #: physics-relevant keywords that must agree between a policy's environment and the baselines'
 _PHYSICS_KEYS = ("scene", "scene_overrides", "control_hz", "dt", "winch_max_speed", "winch_max_acceleration",
@@ -70,6 +70,10 @@ _ID_COLUMNS = ("controller", "episode", "sea_state", "heading_deg", "wave_seed")
 _RECOMPUTED = ("cr_heave", "cr_heave_sp", "cr_pitch")
 
 
+class ReuseError(ValueError):
+    """Rows of an earlier report cannot be reused here (the message names the baseline and the reason)."""
+
+
 def read_report_rows(report_dir) -> tuple[dict, dict]:
     """A written report's ``summary.json`` and its per-episode rows: ``(summary, {controller: [(sea_key,
     heading_deg, wave_seed, {metric: value}), ...]})`` in episode order. ValueError naming the folder if it is not
@@ -79,45 +83,83 @@ def read_report_rows(report_dir) -> tuple[dict, dict]:
     from pathlib import Path
     d = Path(report_dir)
     if not (d / "summary.json").is_file() or not (d / "metrics.csv").is_file():
-        raise ValueError(f"{d}: not a complete report folder (needs summary.json and metrics.csv)")
+        raise ReuseError(f"{d}: not a complete report folder (needs summary.json and metrics.csv)")
     try:
         summary = json.loads((d / "summary.json").read_text())
+        if not isinstance(summary, dict):
+            raise TypeError("summary.json is not a JSON object")
         rows: dict[str, list] = {}
         with open(d / "metrics.csv", newline="") as f:
             for r in csv.DictReader(f):
                 m = {k: float(v) for k, v in r.items() if k not in _ID_COLUMNS and k not in _RECOMPUTED}
                 rows.setdefault(r["controller"], []).append(
                     (int(r["episode"]), r["sea_state"], float(r["heading_deg"]), int(r["wave_seed"]), m))
-    except (ValueError, KeyError, TypeError, OSError) as exc:
-        raise ValueError(f"{d}: unreadable report ({type(exc).__name__}: {exc})") from None
+    except (ValueError, KeyError, TypeError, AttributeError, OSError) as exc:
+        raise ReuseError(f"{d}: unreadable report ({type(exc).__name__}: {exc})") from None
     out = {}
     for n, rs in rows.items():
         rs.sort(key=lambda t: t[0])
         if [t[0] for t in rs] != list(range(len(rs))):
-            raise ValueError(f"{d}: metrics.csv has a gap in {n}'s episodes")
+            raise ReuseError(f"{d}: metrics.csv has a gap in {n}'s episodes")
         out[n] = [t[1:] for t in rs]
     return summary, out
 
 
-def _reused_rows(name: str, report_dir, env_id: str, episodes, discard: float):
-    """The rows of controller ``name`` from ``report_dir`` for exactly these ``episodes`` (same sea state, heading
-    and wave seed, in order) and this start-up window; ValueError naming what differs. Returns (rows, all rows)."""
-    summary, rows = read_report_rows(report_dir)
+def _reused_rows(name: str, report_dir, env_id: str, env_kwargs: dict, description: str, episodes, discard: float):
+    """The rows of baseline ``name`` from ``report_dir`` for exactly these ``episodes`` (same sea state, heading
+    and wave seed, in order), environment keywords, start-up window and baseline description (its tuned gains
+    and settings); :class:`ReuseError` naming what differs. Returns (rows, all rows)."""
+    try:
+        summary, rows = read_report_rows(report_dir)
+    except ReuseError as exc:
+        raise ReuseError(f"--reuse {name}: {exc}") from None
     if summary.get("env_id") != env_id:
-        raise ValueError(f"--reuse {name}: {report_dir} is a report of {summary.get('env_id')!r}, not {env_id!r}")
+        raise ReuseError(f"--reuse {name}: {report_dir} is a report of {summary.get('env_id')!r}, not {env_id!r}")
+    old_kw = summary.get("env_kwargs") or {}
+    if old_kw != _jsonable_kwargs(env_kwargs):
+        raise ReuseError(f"--reuse {name}: {report_dir} ran with environment keywords {old_kw}, this run with "
+                         f"{_jsonable_kwargs(env_kwargs)}")
     if name not in rows:
-        raise ValueError(f"--reuse {name}: {report_dir} has no rows of {name!r} (it has {', '.join(sorted(rows))})")
-    if abs(float(summary.get("discard", math.nan)) - float(discard)) > 1e-9:
-        raise ValueError(f"--reuse {name}: {report_dir} scored after {summary.get('discard')} s, this run after "
+        raise ReuseError(f"--reuse {name}: {report_dir} has no rows of {name!r} (it has {', '.join(sorted(rows))})")
+    old_desc = ((summary.get("controllers") or {}).get(name) or {}).get("description")
+    if old_desc != description:
+        raise ReuseError(f"--reuse {name}: its description differs (settings or tuned gains changed): this run "
+                         f"{description!r}; {report_dir}: {old_desc!r}")
+    try:
+        old_discard = float(summary.get("discard"))
+    except (TypeError, ValueError):
+        old_discard = math.nan
+    if not abs(old_discard - float(discard)) <= 1e-9:
+        raise ReuseError(f"--reuse {name}: {report_dir} scored after {summary.get('discard')} s, this run after "
                          f"{discard:g} s")
-    mine = rows[name]
-    if len(mine) != len(episodes):
-        raise ValueError(f"--reuse {name}: {report_dir} has {len(mine)} episodes, this run {len(episodes)}")
-    for i, ((g, _lab, sea, seed), (g0, head0, seed0, _m)) in enumerate(zip(episodes, mine)):
+    for n, rs in rows.items():
+        if len(rs) != len(episodes):
+            raise ReuseError(f"--reuse {name}: {report_dir} has {len(rs)} episodes of {n}, this run {len(episodes)}")
+    for i, ((g, _lab, sea, seed), (g0, head0, seed0, _m)) in enumerate(zip(episodes, rows[name])):
         if g != g0 or int(seed) != seed0 or abs(float(sea.heading_deg) - head0) > 1e-9:
-            raise ValueError(f"--reuse {name}: episode {i} differs: this run {g}, heading {sea.heading_deg:g}, wave "
+            raise ReuseError(f"--reuse {name}: episode {i} differs: this run {g}, heading {sea.heading_deg:g}, wave "
                              f"seed {seed}; {report_dir}: {g0}, heading {head0:g}, wave seed {seed0}")
-    return [dict(m) for *_x, m in mine], rows
+    return [dict(m) for *_x, m in rows[name]], rows
+
+
+def _jsonable_kwargs(kw: dict) -> dict:
+    import json
+    return json.loads(json.dumps(dict(kw or {}), default=str))
+
+
+def _check_shared(n: str, folder, name: str, mine: list, old: list) -> float:
+    """Largest relative RMS-heave difference between a shared baseline's episodes here and in the report whose
+    rows of ``n`` are reused; :class:`ReuseError` when one exceeds :data:`REUSE_REL_TOL` (NaN included)."""
+    worst = 0.0
+    for i, (m, (*_x, m0)) in enumerate(zip(mine, old)):
+        a, b = float(m["rms_heave"]), float(m0.get("rms_heave", math.nan))
+        d = abs(a - b) / max(abs(a), 1e-12)
+        if not d <= REUSE_REL_TOL:
+            raise ReuseError(f"--reuse {n}: {name}'s RMS heave in episode {i} is {a:.6g} m here and {b:.6g} m in "
+                             f"{folder} (relative difference {d:.1e} > {REUSE_REL_TOL:g}): not the same physics "
+                             f"or episodes; re-run {n}")
+        worst = max(worst, d)
+    return worst
 
 
 @dataclass
@@ -214,19 +256,22 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
     reuse = dict(reuse or {})
     unknown = [n for n in reuse if n not in names]
     if unknown:
-        raise ValueError(f"--reuse: {', '.join(unknown)} not among the baselines of this run ({', '.join(names)})")
-    for n in names:
-        b = make_baseline(n, base_env, tuned)
-        desc = b.describe()
-        if n in reuse:
-            desc += f" — rows reused from the report {reuse[n]} (not re-run; see the reuse check)"
-        ctrls.append(Controller(n, b, base_env, "baseline", desc))
+        raise ReuseError(f"--reuse: {', '.join(unknown)} not among the baselines of this run ({', '.join(names)})")
+    if ref in reuse:
+        raise ReuseError(f"--reuse: the reference {ref} always runs (the reuse check and the compensation ratios "
+                         f"need it)")
     episodes = eval_episodes(base_env, replicates, indices, seed_offset)
     u = base_env.unwrapped
     discard = default_discard(u.episode_seconds) if discard is None else float(discard)
     reused, old_rows = {}, {}
-    for n, folder in reuse.items():
-        reused[n], old_rows[n] = _reused_rows(n, folder, env_id, episodes, discard)
+    for n in names:
+        b = make_baseline(n, base_env, tuned)
+        desc = b.describe()
+        if n in reuse:
+            reused[n], old_rows[n] = _reused_rows(n, reuse[n], env_id, env_kwargs, desc, episodes, discard)
+            desc += f" — rows reused from the report {reuse[n]} (not re-run; see the reuse check)"
+        ctrls.append(Controller(n, b, base_env, "baseline", desc))
+    checks = {n: {"from": str(reuse[n]), "checked_against": [], "max_rel_diff": 0.0} for n in reused}
     metrics: dict[str, list] = {c.name: [] for c in ctrls}
     records: dict[str, dict] = {c.name: {} for c in ctrls}
     first_of_group = {}
@@ -245,29 +290,25 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             metrics[c.name].append(episode_metrics(rec, discard))
             if i in keep:
                 records[c.name][i] = rec
+        for n, rows in old_rows.items():       # the reused rows belong to the same physics: shared baselines agree
+            if c.kind == "baseline" and c.name in rows:
+                d = _check_shared(n, reuse[n], c.name, metrics[c.name], rows[c.name])
+                checks[n]["checked_against"].append(c.name)
+                checks[n]["max_rel_diff"] = max(checks[n]["max_rel_diff"], d)
         if progress:
             sh = np.mean([m["sig_heave"] for m in metrics[c.name]])
             print(f"[evaluate] {c.name:>18s}: {len(episodes)} episodes, mean significant heave {sh:.3f} m "
                   f"({time.time() - tc:.0f} s)", flush=True)
-    checks = {}
-    for n, rows in old_rows.items():          # the reused rows belong to the same physics: shared controllers agree
-        shared = [c.name for c in ctrls if c.name in rows and c.name not in reused]
-        if not shared:
-            raise ValueError(f"--reuse {n}: {reuse[n]} shares no controller with this run to check it against")
-        worst = 0.0
-        for name in shared:
-            for i, (m, (*_x, m0)) in enumerate(zip(metrics[name], rows[name])):
-                a, b = float(m["rms_heave"]), float(m0["rms_heave"])
-                d = abs(a - b) / max(abs(a), 1e-12)
-                if not d <= REUSE_REL_TOL:
-                    raise ValueError(f"--reuse {n}: {name}'s RMS heave in episode {i} is {a:.6g} m here and {b:.6g} m "
-                                     f"in {reuse[n]} (relative difference {d:.1e} > {REUSE_REL_TOL:g}): not the same "
-                                     f"physics or episodes; re-run {n}")
-                worst = max(worst, d)
-        checks[n] = {"from": str(reuse[n]), "checked_against": shared, "max_rel_diff": worst}
+    fresh = next((set(metrics[c.name][0]) for c in ctrls if c.name not in reused and metrics[c.name]), None)
+    for n, chk in checks.items():
+        if not chk["checked_against"]:         # the reference always runs and every report has it: not reached
+            raise ReuseError(f"--reuse {n}: {reuse[n]} shares no baseline with this run to check it against")
+        if fresh is not None and set(reused[n][0]) != fresh - set(_RECOMPUTED):
+            diff = sorted(set(reused[n][0]) ^ (fresh - set(_RECOMPUTED)))
+            raise ReuseError(f"--reuse {n}: {reuse[n]}'s metric columns differ from this version's ({', '.join(diff)})")
         if progress:
-            print(f"[evaluate] reuse check for {n}: {', '.join(shared)} agree with {reuse[n]} in every episode "
-                  f"(RMS heave, largest relative difference {worst:.1e})", flush=True)
+            print(f"[evaluate] reuse check for {n}: {', '.join(chk['checked_against'])} agree with {reuse[n]} in "
+                  f"every episode (RMS heave, largest relative difference {chk['max_rel_diff']:.1e})", flush=True)
     # compensation ratios against the reference (same episode)
     for c in ctrls:
         for m, r in zip(metrics[c.name], metrics[ref]):

@@ -288,7 +288,8 @@ def write_report(res: EvalResult, out_dir: str | Path, title: str, command: str 
               f"`{chk['from']}` (same episodes, wave seeds and start-up window). Reuse check: "
               + ", ".join(f"`{x}`" for x in chk["checked_against"])
               + f" ran here and agree with that report in every episode (RMS heave, largest relative difference "
-                f"{chk['max_rel_diff']:.1e}; metrics.csv keeps 6 significant digits). No time series of `{n}` is "
+                f"{chk['max_rel_diff']:.1e}; metrics.csv keeps 6 significant digits); the environment keywords, "
+                f"start-up window and `{n}`'s description (its settings) are the same. No time series of `{n}` is "
                 f"plotted.", ""]
 
     # ---- main table per sea state
@@ -482,7 +483,8 @@ def _summary_json(res: EvalResult, seed_set: str | None = None, across_seeds: li
                      "meta": {k: v for k, v in c.meta.items() if k in ("algo", "num_timesteps", "seed", "env_kwargs",
                                                                       "selected", "wall_seconds_this_session")}}
             for c in res.controllers}
-    return json.dumps({"env_id": res.env_id, "discard": res.discard, "reference": res.reference,
+    return json.dumps({"env_id": res.env_id, "env_kwargs": _jsonable(res.env_kwargs), "discard": res.discard,
+                       "reference": res.reference,
                        "n_episodes": n_ep, "min_verdict_episodes": MIN_VERDICT_EPISODES, "seed_set": seed_set,
                        "wave_seeds": [int(e[3]) for e in res.episodes], "controllers": meta, "goals": goals,
                        "reused": _jsonable(getattr(res, "reused", None) or {}),

@@ -151,13 +151,30 @@ def test_policy_file_round_trip_and_refusal(tmp_path, env, feature_set):
         ars.ARSPolicy({"hs0.88_tp4.03": np.zeros(ars.n_features("v1"))}, pol.base_table, feature_set="v2")
     with pytest.raises(ValueError, match="feature_set must be one of"):
         _policy(feature_set="v9")
+    if feature_set == "v2":         # a v2 file whose feature scales are not this version's is refused
+        z = dict(np.load(f))
+        meta = json.loads(str(z["meta"]))
+        meta["extra_scales"]["top_tension"] = [1.0, 0.2]
+        z["meta"] = np.array(json.dumps(meta))
+        np.savez(tmp_path / "scaled.npz", **z)
+        with pytest.raises(ValueError, match="feature scales"):
+            ars.load_ars_policy(tmp_path / "scaled.npz")
+        # and it needs the v2 channels observed
+        narrow = gym.make(WINCH, episode_seconds=SECONDS, observations=["tow_vel_along", "tow_acc_along",
+                                                                         "tow_disp_along", "winch_length_dev",
+                                                                         "fish_heave_dev", "fish_heave_rate"])
+        with pytest.raises(KeyError, match="needs observation channels"):
+            back.bind_env(narrow)
+        narrow.close()
 
 
 def test_committed_v1_policies_still_load():
     """Files written before feature sets existed (no ``feature_set`` entry) load as v1 with their 37 weights."""
     from pathlib import Path
     import agents
-    for f in sorted((Path(agents.__file__).parent / "trained").glob("ars_WinchPayout-v0_s*.npz")):
+    files = sorted((Path(agents.__file__).parent / "trained").glob("ars_WinchPayout-v0_s*.npz"))
+    assert len(files) == 3
+    for f in files:
         meta = json.loads(str(np.load(f)["meta"]))
         pol = ars.load_ars_policy(f)
         assert pol.feature_set == meta.get("feature_set", "v1")
@@ -187,3 +204,25 @@ def test_evaluate_takes_an_ars_policy_file(tmp_path, monkeypatch, capsys):
     summary = json.loads((tmp_path / "runs" / "reports" / "ars_test_s0" / "summary.json").read_text())
     assert "ars_test_s0" in json.dumps(summary)
     assert "ARS policy" in (tmp_path / "runs" / "reports" / "ars_test_s0" / "report.md").read_text()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_committed_v2_policies_ship_load_and_act(env, seed):
+    """The three committed feature-set-v2 policies (docs/agents.md "Results") are package data of the installed
+    ``agents``, load with their recipe (70 iterations, the along-cable table's sea states), use the v2 channels
+    (non-zero weights on them) and act: inside the action box and not the along-cable law itself."""
+    from pathlib import Path
+
+    import agents
+    pol = ars.load_ars_policy(Path(agents.__file__).parent / "trained" / f"ars2_WinchPayout-v0_s{seed}.npz")
+    assert pol.feature_set == "v2" and (pol.meta["seed"], pol.meta["iterations"]) == (seed, 70)
+    assert set(pol.theta) == set(pol.base_table) == set(load_tuned()["along_cable"])
+    names = ars.feature_names("v2")
+    extra = [names.index(c) for c in ars.FEATURE_SETS["v2"]]
+    assert all(np.abs(th[extra]).max() > 0 for th in pol.theta.values())
+    pol.bind_env(env)
+    sea, s = env.unwrapped.eval_sea_states()[7]
+    a = rollout(env, pol, sea, s + 123456)
+    b = rollout(env, make_baseline("along_cable", env), sea, s + 123456)
+    assert np.all(np.isfinite(a.data["winch_speed"])) and np.all(np.abs(a.data["winch_speed"]) <= env.unwrapped.winch_max_speed + 1e-9)
+    assert not np.array_equal(a.data["winch_speed"], b.data["winch_speed"])

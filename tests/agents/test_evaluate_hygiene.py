@@ -390,9 +390,15 @@ def test_reuse_takes_rows_only_from_a_report_of_the_same_physics(tmp_path, evalu
         evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
                        "--name", "d", "--reuse", f"along_cable={a}", *quick])
     assert ex.value.code == 2 and "not the same physics" in capsys.readouterr().err
-    # bad forms
+    # other environment keywords (a faster winch: fixed_winch alone would not tell): refused
+    with pytest.raises(SystemExit) as ex:
+        evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                       "--name", "f", "--reuse", f"along_cable={a}", "--env", WINCH, "--no-plots", "--discard", "10",
+                       "--env-kwargs", "episode_seconds:30", "winch_max_speed:3.0"])
+    assert ex.value.code == 2 and "environment keywords" in capsys.readouterr().err
+    # bad forms: no folder, not a report, not a baseline of the run, the reference, a bare flag
     for bad in (["--reuse", "along_cable"], ["--reuse", f"along_cable={tmp_path / 'nowhere'}"],
-                ["--reuse", f"pd_ff={a}"]):
+                ["--reuse", f"pd_ff={a}"], ["--reuse", f"fixed_winch={a}"], ["--reuse"]):
         with pytest.raises(SystemExit) as ex:
             evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
                            "--name", "e", *bad, *quick])
