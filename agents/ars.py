@@ -392,8 +392,16 @@ def load_ars_policy(path: str | Path) -> ARSPolicy:
     return ARSPolicy(theta, table, scales, meta, name=Path(path).stem)
 
 
+def default_export(feature_set: str, seed: int) -> Path:
+    """Where ``train_ars.py`` writes without ``--export``: the policy family's name by feature set (``ars_`` for
+    v1, ``ars2_`` for v2 — the names of the committed policies), under ``runs/`` in the current directory."""
+    prefix = "ars" if _check_feature_set(feature_set) == "v1" else f"ars{feature_set[1:]}"
+    return Path("runs") / f"{prefix}_WinchPayout-v0_s{int(seed)}.npz"
+
+
 def main(argv=None) -> int:
-    """``python scripts/train_ars.py --seed 0 --minutes 40 --export agents/trained/ars_WinchPayout-v0_s0.npz``"""
+    """``python scripts/train_ars.py --seed 0 --minutes 110 --max-iterations 70`` (the v2 recipe; writes
+    :func:`default_export`)"""
     import argparse
     ap = argparse.ArgumentParser(description="Train an ARS linear residual over the along-cable winch law "
                                              "(towenv/WinchPayout-v0); agents/ars.py explains the method.")
@@ -409,7 +417,8 @@ def main(argv=None) -> int:
     ap.add_argument("--features", choices=sorted(FEATURE_SETS), default=DEFAULT_FEATURE_SET,
                     help=f"feature set (default {DEFAULT_FEATURE_SET}; v1 is the set of the policies committed "
                          "before 2026-12-03)")
-    ap.add_argument("--export", default=None, help="policy file (default runs/ars_WinchPayout-v0_s<seed>.npz)")
+    ap.add_argument("--export", default=None, help="policy file (default runs/ars2_WinchPayout-v0_s<seed>.npz for "
+                                                  "feature set v2, runs/ars_WinchPayout-v0_s<seed>.npz for v1)")
     a = ap.parse_args(argv)
     for name in ("minutes", "nu", "alpha", "episode_seconds"):
         v = getattr(a, name)
@@ -419,7 +428,7 @@ def main(argv=None) -> int:
         ap.error("need --directions >= 1, 1 <= --top <= --directions, --max-iterations >= 1, --pitch-weight >= 0")
     if a.episode_seconds < 120.0:
         ap.error("--episode-seconds must be >= 120 (the score starts at 60 s)")
-    out = Path(a.export or f"runs/ars_WinchPayout-v0_s{a.seed}.npz")
+    out = Path(a.export or default_export(a.features, a.seed))
     pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
                 a.episode_seconds, feature_set=a.features)
     save_policy(pol, out)

@@ -206,6 +206,14 @@ def test_evaluate_takes_an_ars_policy_file(tmp_path, monkeypatch, capsys):
     assert "ARS policy" in (tmp_path / "runs" / "reports" / "ars_test_s0" / "report.md").read_text()
 
 
+def test_default_export_names_the_family_by_feature_set():
+    """Without --export a v2 run writes the v2 family's name (ars2_, as the committed files), a v1 run the v1 name."""
+    assert str(ars.default_export("v2", 1)) == "runs/ars2_WinchPayout-v0_s1.npz"
+    assert str(ars.default_export("v1", 0)) == "runs/ars_WinchPayout-v0_s0.npz"
+    with pytest.raises(ValueError, match="feature_set"):
+        ars.default_export("v7", 0)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_committed_v2_policies_ship_load_and_act(env, seed):
     """The three committed feature-set-v2 policies (docs/agents.md "Results") are package data of the installed
