@@ -77,6 +77,14 @@ def _check_feature_set(feature_set: str) -> str:
     return feature_set
 
 
+def _require_channels(reader, feature_set: str, who: str):
+    """KeyError naming the channels of ``feature_set`` the environment behind ``reader`` does not observe."""
+    missing = [c for c in FEATURE_SETS[_check_feature_set(feature_set)] if not reader.has(c)]
+    if missing:
+        raise KeyError(f"{who} (feature set {feature_set!r}) needs observation channels {missing}; "
+                       f"the environment observes {reader.names}")
+
+
 def feature_names(feature_set: str = "v1") -> list[str]:
     extra = FEATURE_SETS[_check_feature_set(feature_set)]
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
@@ -128,10 +136,7 @@ class ARSPolicy:
         self.env = env
         self.base = AlongCableWinch(env, table=self.base_table)
         self.reader = self.base.reader
-        missing = [c for c in FEATURE_SETS[self.feature_set] if not self.reader.has(c)]
-        if missing:
-            raise KeyError(f"ARSPolicy (feature set {self.feature_set!r}) needs observation channels {missing}; "
-                           f"the environment observes {self.reader.names}")
+        _require_channels(self.reader, self.feature_set, "ARSPolicy")
         self.u = env.unwrapped
         return self
 
@@ -185,11 +190,8 @@ class _Batch:
 
     def __init__(self, venv, base_table: dict, scales: dict, feature_set: str = "v1"):
         self.reader = ObsReader(venv.envs[0])
-        self.extra = FEATURE_SETS[_check_feature_set(feature_set)]
-        for c in self.extra:
-            if not self.reader.has(c):
-                raise KeyError(f"ARS feature set {feature_set!r} needs observation channel {c!r}; "
-                               f"the environment observes {self.reader.names}")
+        _require_channels(self.reader, feature_set, "ARS training")
+        self.extra = FEATURE_SETS[feature_set]
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales
