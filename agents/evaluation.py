@@ -205,10 +205,10 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
     """Evaluate ``trained`` policies ``[(name, SB3Policy-like, meta)]`` and the ``baselines``.
 
     ``reuse`` ``{baseline name: report folder}``: that baseline is not run; its per-episode metrics are read from
-    the earlier report (``metrics.csv``), which must hold the same episodes and start-up window, and every other
-    controller the two runs share must agree per episode to :data:`REUSE_REL_TOL` in RMS heave (at least one
-    must be shared) — so the rows belong to the same physics. For the clairvoyant winch, whose plans cost ~2 min
-    per episode.
+    the earlier report (``metrics.csv``), which must hold the same episodes, environment keywords, start-up window,
+    baseline description and metric columns, and every other *baseline* the two runs share (the reference always
+    runs) must agree per episode to :data:`REUSE_REL_TOL` in RMS heave — so the rows belong to the same physics.
+    The reference itself cannot be reused. For the clairvoyant winch, whose plans cost ~2 min per episode.
 
     The baselines run on ``gym.make(env_id, **env_kwargs)``; each trained policy on its own environment
     made from its metadata's keywords and wrappers (with ``env_kwargs`` on top), so that its observation
