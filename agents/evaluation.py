@@ -17,7 +17,7 @@ import numpy as np
 
 from .baselines import REFERENCE, baseline_names, load_tuned, make_baseline
 from .common import env_kind, sea_key, sea_label
-from .metrics import bootstrap_mean_ci, default_discard, episode_metrics, paired_reduction_ci, rollout
+from .metrics import bootstrap_mean_ci, default_discard, episode_metrics, metric_columns, paired_reduction_ci, rollout
 
 __all__ = ["Controller", "EvalResult", "eval_episodes", "make_eval_env", "run_evaluation", "GOALS", "read_report_rows",
            "REUSE_REL_TOL", "ReuseError"]
@@ -269,6 +269,10 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
         desc = b.describe()
         if n in reuse:
             reused[n], old_rows[n] = _reused_rows(n, reuse[n], env_id, env_kwargs, desc, episodes, discard)
+            diff = sorted(set(reused[n][0]) ^ set(metric_columns(kind)))    # before any episode runs
+            if diff:
+                raise ReuseError(f"--reuse {n}: {reuse[n]}'s metric columns differ from this version's "
+                                 f"({', '.join(diff)})")
             desc += f" — rows reused from the report {reuse[n]} (not re-run; see the reuse check)"
         ctrls.append(Controller(n, b, base_env, "baseline", desc))
     checks = {n: {"from": str(reuse[n]), "checked_against": [], "max_rel_diff": 0.0} for n in reused}
@@ -299,13 +303,9 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             sh = np.mean([m["sig_heave"] for m in metrics[c.name]])
             print(f"[evaluate] {c.name:>18s}: {len(episodes)} episodes, mean significant heave {sh:.3f} m "
                   f"({time.time() - tc:.0f} s)", flush=True)
-    fresh = next((set(metrics[c.name][0]) for c in ctrls if c.name not in reused and metrics[c.name]), None)
     for n, chk in checks.items():
         if not chk["checked_against"]:         # the reference always runs and every report has it: not reached
             raise ReuseError(f"--reuse {n}: {reuse[n]} shares no baseline with this run to check it against")
-        if fresh is not None and set(reused[n][0]) != fresh - set(_RECOMPUTED):
-            diff = sorted(set(reused[n][0]) ^ (fresh - set(_RECOMPUTED)))
-            raise ReuseError(f"--reuse {n}: {reuse[n]}'s metric columns differ from this version's ({', '.join(diff)})")
         if progress:
             print(f"[evaluate] reuse check for {n}: {', '.join(chk['checked_against'])} agree with {reuse[n]} in "
                   f"every episode (RMS heave, largest relative difference {chk['max_rel_diff']:.1e})", flush=True)

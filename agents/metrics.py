@@ -23,7 +23,7 @@ import numpy as np
 
 from .common import env_kind
 
-__all__ = ["EpisodeRecord", "rollout", "episode_metrics", "bootstrap_mean_ci", "paired_reduction_ci",
+__all__ = ["EpisodeRecord", "rollout", "episode_metrics", "metric_columns", "bootstrap_mean_ci", "paired_reduction_ci",
            "HEAVE_RATE_LIMIT", "PITCH_RATE_LIMIT_DEG", "default_discard"]
 
 HEAVE_RATE_LIMIT = 1.0            # m/s, thesis Table 6.1
@@ -131,6 +131,26 @@ def rollout(env, policy, sea, sea_seed: int, seed: int | None = None, max_steps:
 
 def _std(x):
     return float(np.std(x)) if x.size else math.nan
+
+
+#: the keys :func:`episode_metrics` returns, in its order: every episode, then the winch's or the compensator's own
+#: (``tests/agents`` checks them against the function; ``--reuse`` compares an earlier report's columns with them
+#: before any episode runs)
+COMMON_METRICS = ("sig_heave", "rms_heave", "rms_heave_sp", "mean_heave", "sig_pitch_deg", "rms_pitch_deg",
+                  "mean_pitch_deg", "rms_heave_rate", "max_heave_rate", "frac_heave_rate_over", "rms_pitch_rate_deg",
+                  "max_pitch_rate_deg", "frac_pitch_rate_over", "sig_tow_heave", "heave_transmissibility",
+                  "top_tension_max", "top_tension_min", "top_tension_std", "top_tension_max_all", "min_tension_all",
+                  "slack_steps", "slack_frac", "return", "steps", "terminated", "failure")
+KIND_METRICS = {"compensator": ("stroke_max_frac", "stroke_height", "stroke_1000_frac", "end_stop_hits",
+                                "mean_stiffness", "mean_damping"),
+                "winch": ("winch_dev_max_frac", "winch_rms_speed", "winch_frac_at_limit", "winch_peak_power_kw")}
+
+
+def metric_columns(kind: str) -> tuple[str, ...]:
+    """The per-episode metric names of an environment kind (``"winch"`` or ``"compensator"``)."""
+    if kind not in KIND_METRICS:
+        raise ValueError(f"kind must be one of {sorted(KIND_METRICS)} (got {kind!r})")
+    return COMMON_METRICS + KIND_METRICS[kind]
 
 
 def episode_metrics(rec: EpisodeRecord, discard: float = 60.0) -> dict[str, float]:

@@ -44,7 +44,7 @@ def test_baselines_run_and_act_within_bounds(env_id, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)                  # the clairvoyant baselines cache their plans under runs/
     from agents.baselines import baseline_names, make_baseline
     from agents.common import env_kind
-    from agents.metrics import episode_metrics, rollout
+    from agents.metrics import episode_metrics, metric_columns, rollout
     env = gym.make(env_id, episode_seconds=6.0)
     sea, seed = env.unwrapped.eval_sea_states()[4]
     for name in baseline_names(env_kind(env_id)):
@@ -53,6 +53,7 @@ def test_baselines_run_and_act_within_bounds(env_id, tmp_path, monkeypatch):
         assert rec.steps == env.unwrapped.max_steps
         m = episode_metrics(rec, discard=2.0)
         assert all(math.isfinite(v) for v in m.values()), (name, m)
+        assert tuple(m) == metric_columns(env_kind(env_id))      # the columns --reuse checks before running
         a, state = pol.predict(np.zeros(env.observation_space.shape, np.float32), episode_start=np.array([False]))
         assert a.shape == env.action_space.shape and np.all(np.abs(a) <= 1.0) and state is None
         assert pol.describe()

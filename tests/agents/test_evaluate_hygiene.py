@@ -371,6 +371,22 @@ def test_reuse_takes_rows_only_from_a_report_of_the_same_physics(tmp_path, evalu
     assert [r["rms_heave"] for r in ra] == [r["rms_heave"] for r in rb] and len(ra) == 2
     assert json.loads((b / "summary.json").read_text())["reused"]["along_cable"]["checked_against"] == ["fixed_winch"]
     assert "Reused rows" in (b / "report.md").read_text()
+    # a report of another version (other metric columns): refused before any episode runs
+    import shutil
+    import agents.evaluation as evaluation
+    old_cols = tmp_path / "old_columns"
+    shutil.copytree(a, old_cols)
+    lines = (old_cols / "metrics.csv").read_text().splitlines()
+    drop = lines[0].split(",").index("winch_peak_power_kw")
+    (old_cols / "metrics.csv").write_text("\n".join(",".join(c for j, c in enumerate(line.split(",")) if j != drop)
+                                                     for line in lines) + "\n")
+    monkeypatch.setattr(evaluation, "rollout", lambda *a, **k: pytest.fail("an episode ran before the column check"))
+    with pytest.raises(SystemExit) as ex:
+        evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                       "--name", "g", "--reuse", f"along_cable={old_cols}", *quick])
+    assert ex.value.code == 2 and "metric columns differ from this version's (winch_peak_power_kw)" in capsys.readouterr().err
+    monkeypatch.undo()
+    monkeypatch.chdir(tmp_path)
     # other episodes: refused before anything is written
     with pytest.raises(SystemExit) as ex:
         evaluate.main(["along_cable", "--episodes", "1", "5", "--baselines", "fixed_winch", "along_cable",
