@@ -230,9 +230,10 @@ class _Batch:
         return np.concatenate([lagged, inst, extra, np.ones((n, 1))], axis=1)
 
 
-def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0):
-    """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i]); returns
-    σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard per copy (NaN for a copy that ended early)."""
+def rollout_series(venv, batch: _Batch, seas, seeds, theta):
+    """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i]); returns the fish
+    heave (m) and pitch (rad) per control step, ``(T, n)`` each, the time of each step and a per-copy flag of copies
+    that ended early."""
     from .common import reset_copies
     n = venv.num_envs
     obs = reset_copies(venv, seas, seeds)
@@ -251,6 +252,13 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
         t[k] = infos["t"][0]
         if k < T - 1:
             ended |= term | trunc
+    return H, P, t, ended
+
+
+def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0):
+    """One episode in every copy of ``venv`` (:func:`rollout_series`); returns σ(fish heave) (m) and σ(pitch) (deg)
+    over t ≥ discard per copy (NaN for a copy that ended early)."""
+    H, P, t, ended = rollout_series(venv, batch, seas, seeds, theta)
     w = t >= discard
     sh = H[w].std(axis=0)
     sp = np.degrees(P[w].std(axis=0))

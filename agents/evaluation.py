@@ -238,8 +238,12 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             fs = meta.get("feature_set", "v1")
             more = ("" if fs == "v1" else " and the winch speed, last action, top tension, cable angle, fish pitch "
                     "and pitch rate")
+            gn = meta.get("method") == "gauss-newton"
+            if gn:
+                desc = "Gauss-Newton policy search (the ARS policy class)"
             desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
-                     f"{meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
+                     f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations, training seed "
+                     f"{meta.get('seed', '?')})")
         elif meta.get("algo") == "ars_skyhook":
             desc = ("ARS policy, linear residual on `skyhook` over the tow-point heave history and stroke features "
                     f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")

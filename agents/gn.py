@@ -1,0 +1,224 @@
+"""Gauss–Newton policy search for the WinchPayout linear residual (the ARS policy class of ``agents/ars.py``).
+
+ARS learns θ from one number per episode (its cost). But an episode gives a whole time series — the fish heave and
+pitch at every control step — and θ enters linearly into the action. This search uses that series:
+
+1. **Jacobian by finite differences on the simulator.** For the current θ, run the batch of training episodes
+   (one per (sea state, heading) and replicate; fresh wave seeds every iteration) once as it is and once per
+   feature i with θ_i + ε (``ε = 0.005``; every sea state's θ perturbed in the same copy — an episode only sees its
+   own sea state's weights). J_i = (y(θ + ε e_i) − y(θ))/ε over the scored window, for heave and pitch, each with
+   its window mean removed. The simulator is deterministic, so J is the secant of the real closed loop, winch
+   limits, slack and feedback features included — what the one-shot linear design (``scripts/probe_linear_design.py``)
+   misses.
+2. **Gauss–Newton step per sea state**: minimise Σ_e ‖y_e + J_e Δθ‖²/σ_h,e² + w_p ‖p_e + J^p_e Δθ‖²/σ_p,e²
+   + λ·(mean diagonal)·‖Δθ‖² — the linearisation of the ARS cost ln σ_h + w_p ln σ_p — for each ridge λ in
+   ``ridges``.
+3. **Line search on fresh episodes** (other wave seeds than step 1): θ, θ + Δθ(λ) for each λ and the along-cable law
+   on the same waves; per sea state keep the candidate with the lowest mean cost
+   ln(σ_h/σ_h,along) + w_p ln(σ_p/σ_p,along) — no step if none beats the current θ.
+
+The result is an :class:`agents.ars.ARSPolicy` (same features, same file format, ``meta["method"] =
+"gauss-newton"``), so ``scripts/evaluate.py`` and everything that loads ARS policies load it unchanged.
+
+Wave seeds: Jacobian episodes ``1000·code + j + 80000 + 200·iteration + 100000·seed``, line-search episodes the same
++ 100; iteration < :data:`MAX_ITERATIONS` — never an evaluation (+0…400), tuning (+500), validation (+700), Hover
+design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training (+40000…, +50000…) or probe (+75000,
++76000) seed.
+"""
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import ars
+from .common import nearest_key
+
+__all__ = ["train", "train_seed", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
+
+#: wave seeds of the search: base seed (1000·code + j) + SEED_OFFSET + 200·iteration (+ 100 for the line search)
+#: + 100000·training seed
+SEED_OFFSET = 80000
+#: 200·iteration + 100 stays below 10000: a run's seeds stay inside its own block of 10000
+MAX_ITERATIONS = 49
+
+
+def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = False) -> int:
+    if not 0 <= int(iteration) < MAX_ITERATIONS:
+        raise ValueError(f"iteration must be in 0..{MAX_ITERATIONS - 1} (got {iteration})")
+    return int(base_seed) + SEED_OFFSET + 200 * int(iteration) + (100 if line_search else 0) + 100000 * int(seed)
+
+
+def _cost(sh, sp, sh_ref, sp_ref, pitch_weight, fail_penalty=1.0):
+    c = np.log(sh / sh_ref) + pitch_weight * np.log(sp / sp_ref)
+    return np.where(np.isfinite(c), c, fail_penalty)
+
+
+def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates: int = 1, eps: float = 0.005,
+          ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, episode_seconds: float = 180.0,
+          discard: float = 60.0, feature_set: str = ars.DEFAULT_FEATURE_SET, entries=None, progress: bool = True,
+          log=print) -> ars.ARSPolicy:
+    """Gauss–Newton search (module docstring) from θ = 0 (the along-cable law). Stops after ``iterations`` or when
+    the next iteration would pass ``minutes`` of wall time. ``entries``: indices into the evaluation (sea state,
+    heading) list to train on (default all 12)."""
+    import gymnasium as gym
+    import towenv  # noqa: F401  (registers the ids)
+    from towenv.envs.vector import WinchPayoutVectorEnv
+    from .baselines import load_tuned
+    if not 1 <= int(iterations) <= MAX_ITERATIONS:
+        raise ValueError(f"iterations must be in 1..{MAX_ITERATIONS} (got {iterations})")
+    if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
+        raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
+    if int(replicates) < 1:
+        raise ValueError(f"replicates must be >= 1 (got {replicates})")
+    if not episode_seconds > discard + 1.0:
+        raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
+    t_start = time.perf_counter()
+    table = dict(load_tuned().get("along_cable") or {})
+    if not table:
+        raise RuntimeError("no tuned along_cable table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
+    env = gym.make(ars.ENV_ID)
+    ev = env.unwrapped.eval_sea_states()
+    env.close()
+    idx = list(range(len(ev))) if entries is None else [int(i) for i in entries]
+    keys = sorted({nearest_key(table, ev[i][0]) for i in idx})
+    C, NF, R = len(keys), ars.n_features(feature_set), int(replicates)
+    ridges = [float(r) for r in ridges]
+    n_ep = len(idx) * R
+    n_jac, n_ls = n_ep * (NF + 1), n_ep * (len(ridges) + 2)
+    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds))
+    venv_j = WinchPayoutVectorEnv(num_envs=n_jac, **kw)
+    venv_l = WinchPayoutVectorEnv(num_envs=n_ls, **kw)
+    scales = dict(ars.FEATURE_SCALES)
+    batch_j = ars._Batch(venv_j, table, scales, feature_set)
+    batch_l = ars._Batch(venv_l, table, scales, feature_set)
+    theta = np.zeros((C, NF))
+    curve = []
+    log(f"[gn] seed {seed}: {C} sea states, {NF} features each; per iteration {n_ep} episodes x ({NF} + 1) for the "
+        f"Jacobian and {n_ep} x ({len(ridges)} ridges + current + along_cable) for the line search, "
+        f"{episode_seconds:g} s each; eps={eps} ridges={ridges} pitch_weight={pitch_weight}")
+    it, last = 0, 0.0
+    while it < iterations:
+        if time.perf_counter() - t_start + last > 60.0 * minutes:
+            break
+        t0 = time.perf_counter()
+        ents = [(ev[i][0], ev[i][1]) for _r in range(R) for i in idx]
+        reps = [r for r in range(R) for _i in idx]
+        code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
+        seas = [sea for sea, _s in ents]
+        # 1. Jacobian: copy block 0 runs θ, block i + 1 runs θ + ε e_i
+        seeds = [train_seed(s + 10 * r, it, seed) for (_sea, s), r in zip(ents, reps)]
+        th = np.repeat(theta[code][None], NF + 1, axis=0)
+        for i in range(NF):
+            th[i + 1, :, i] += eps
+        H, P, t, ended = ars.rollout_series(venv_j, batch_j, seas * (NF + 1), seeds * (NF + 1), th.reshape(-1, NF))
+        w = t >= discard
+        Y = H[w].reshape(-1, NF + 1, n_ep)
+        Q = P[w].reshape(-1, NF + 1, n_ep)
+        Y = Y - Y.mean(axis=0)
+        Q = Q - Q.mean(axis=0)
+        y0, q0 = Y[:, 0], Q[:, 0]
+        Jy = (Y[:, 1:] - y0[:, None]) / eps
+        Jq = (Q[:, 1:] - q0[:, None]) / eps
+        sy, sq = y0.std(axis=0), q0.std(axis=0)
+        ok = ~ended.reshape(NF + 1, n_ep).any(axis=0) & (sy > 0) & (sq > 0)
+        # 2. Gauss–Newton steps per sea state and ridge
+        steps = np.zeros((len(ridges), C, NF))
+        for c in range(C):
+            es = np.flatnonzero((code == c) & ok)
+            if es.size == 0:
+                continue
+            A = np.zeros((NF, NF))
+            b = np.zeros(NF)
+            for e in es:
+                A += Jy[:, :, e].T @ Jy[:, :, e] / sy[e] ** 2 + pitch_weight * Jq[:, :, e].T @ Jq[:, :, e] / sq[e] ** 2
+                b += Jy[:, :, e].T @ y0[:, e] / sy[e] ** 2 + pitch_weight * Jq[:, :, e].T @ q0[:, e] / sq[e] ** 2
+            d = np.trace(A) / NF
+            for j, lam in enumerate(ridges):
+                steps[j, c] = -np.linalg.solve(A + lam * d * np.eye(NF), b)
+        # 3. line search on fresh episodes: along_cable, θ, θ + Δθ(λ) for every λ, on the same waves
+        seeds_l = [train_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
+        cand = np.concatenate([np.zeros((1, n_ep, NF)), theta[code][None], theta[code][None] + steps[:, code]])
+        H, P, t, ended = ars.rollout_series(venv_l, batch_l, seas * len(cand), seeds_l * len(cand),
+                                            cand.reshape(-1, NF))
+        w = t >= discard
+        sh = H[w].std(axis=0).reshape(len(cand), n_ep)
+        sp = P[w].std(axis=0).reshape(len(cand), n_ep)
+        bad = ended.reshape(len(cand), n_ep)
+        sh[bad] = np.nan
+        sp[bad] = np.nan
+        cost = _cost(sh[1:], sp[1:], sh[0], sp[0], pitch_weight)
+        picks = []
+        for c in range(C):
+            m = code == c
+            cc = cost[:, m].mean(axis=1)           # current θ, then one per ridge
+            j = int(np.argmin(cc))
+            if j > 0:
+                theta[c] += steps[j - 1, c]
+            picks.append({"sea_state": keys[c], "cost_current": float(cc[0]), "cost_after": float(cc[j]),
+                          "ridge": ridges[j - 1] if j else None, "step_norm": float(np.linalg.norm(steps[j - 1, c])) if j else 0.0})
+        ratio_h = float(np.nanmean(sh[1]) / np.nanmean(sh[0]))
+        ratio_p = float(np.nanmean(sp[1]) / np.nanmean(sp[0]))
+        last = time.perf_counter() - t0
+        curve.append({"iteration": it, "heave_ratio": ratio_h, "pitch_ratio": ratio_p, "seconds": last,
+                      "picks": picks, "failures": int(bad.sum())})
+        if progress:
+            log(f"[gn] it {it:2d} ({last:4.0f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): θ before this "
+                f"step vs along_cable on {n_ep} fresh episodes: heave {100 * (ratio_h - 1):+6.2f} %, pitch "
+                f"{100 * (ratio_p - 1):+5.1f} %; cost per sea state " + ", ".join(
+                    f"{p['cost_current']:+.3f} -> {p['cost_after']:+.3f}"
+                    + (f" (ridge {p['ridge']:g})" if p["ridge"] is not None else " (no step)") for p in picks))
+        it += 1
+    steps_per_episode = int(venv_j.envs[0].max_steps)
+    venv_j.close()
+    venv_l.close()
+    wall = time.perf_counter() - t_start
+    meta = {"algo": "ars", "method": "gauss-newton", "env_id": ars.ENV_ID, "env_kwargs": {},
+            "feature_set": feature_set, "seed": int(seed), "iterations": it,
+            "num_timesteps": it * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
+            "hyperparameters": {"iterations": iterations, "minutes": minutes, "replicates": R, "eps": eps,
+                                "ridges": ridges, "pitch_weight": pitch_weight, "episode_seconds": episode_seconds,
+                                "discard": discard, "entries": idx},
+            "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
+                           f"+ 100000*{int(seed)}",
+            "curve": curve}
+    return ars.ARSPolicy({k: theta[c] for c, k in enumerate(keys)}, table, ars.FEATURE_SCALES, meta,
+                         name=f"gn_s{seed}", feature_set=feature_set)
+
+
+def default_export(seed: int) -> Path:
+    return Path("runs") / f"gn_WinchPayout-v0_s{int(seed)}.npz"
+
+
+def main(argv=None) -> int:
+    """``python scripts/train_gn.py --seed 0`` (writes :func:`default_export`)."""
+    import argparse
+    ap = argparse.ArgumentParser(description="Gauss-Newton policy search for the linear residual over the along-cable "
+                                             "winch law (towenv/WinchPayout-v0); agents/gn.py explains the method.")
+    ap.add_argument("--seed", type=int, default=0, help="training seed (the training wave seeds)")
+    ap.add_argument("--iterations", type=int, default=10, help=f"1..{MAX_ITERATIONS} (default 10)")
+    ap.add_argument("--minutes", type=float, default=55.0, help="wall-clock budget (default 55)")
+    ap.add_argument("--replicates", type=int, default=1, help="wave seeds per (sea state, heading) per iteration")
+    ap.add_argument("--eps", type=float, default=0.005, help="finite-difference step of a weight")
+    ap.add_argument("--ridges", type=float, nargs="+", default=[0.01, 0.1, 1.0],
+                    help="ridge weights tried by the line search (relative to the normal matrix's mean diagonal)")
+    ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
+    ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz)")
+    a = ap.parse_args(argv)
+    if not 1 <= a.iterations <= MAX_ITERATIONS:
+        ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
+    if a.replicates < 1 or a.pitch_weight < 0:
+        ap.error("need --replicates >= 1 and --pitch-weight >= 0")
+    for name in ("minutes", "eps"):
+        v = getattr(a, name)
+        if not (math.isfinite(v) and v > 0):
+            ap.error(f"--{name} must be a positive number (got {v})")
+    if any(not (math.isfinite(r) and r > 0) for r in a.ridges):
+        ap.error(f"--ridges must be positive numbers (got {a.ridges})")
+    out = Path(a.export or default_export(a.seed))
+    pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight)
+    ars.save_policy(pol, out)
+    print(f"[gn] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
+    return 0

@@ -1,0 +1,86 @@
+"""Gauss–Newton policy search for the WinchPayout linear residual (issue 14, agents/gn.py): it trains on the batched
+vector env from the along-cable law, its line search never keeps a step that loses on its own episodes, its wave seeds
+are disjoint from every evaluation/final/tuning/validation seed and from the ARS trainings', bad settings are refused
+with the field named, and its policy file is an ARS policy file that scripts/evaluate.py names as Gauss–Newton."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+pytest.importorskip("stable_baselines3")
+
+import towenv  # noqa: E402,F401
+from agents import ars, gn  # noqa: E402
+from helpers import load_script  # noqa: E402
+
+WINCH = "towenv/WinchPayout-v0"
+
+
+@pytest.fixture(scope="module")
+def trained():
+    """Two iterations on one heading per sea state, 70 s episodes scored after 60 s (~30 s)."""
+    return gn.train(seed=3, iterations=2, entries=[0, 4, 8], episode_seconds=70.0, discard=60.0, progress=False)
+
+
+def test_search_runs_on_the_batched_env_and_keeps_only_improving_steps(trained):
+    pol = trained
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["iterations"] == 2 and len(pol.meta["curve"]) == 2
+    assert pol.meta["curve"][0]["heave_ratio"] == pytest.approx(1.0)        # θ = 0 (the along-cable law) first
+    assert set(pol.theta) == set(pol.base_table) and pol.feature_set == "v2"
+    assert all(np.all(np.isfinite(v)) for v in pol.theta.values())
+    for rec in pol.meta["curve"]:
+        for p in rec["picks"]:      # a step is kept only if it beats the current θ on the line-search episodes
+            assert p["cost_after"] <= p["cost_current"]
+            assert (p["ridge"] is None) == (p["step_norm"] == 0.0)
+    moved = [p for rec in pol.meta["curve"] for p in rec["picks"] if p["ridge"] is not None]
+    norms = {k: float(np.linalg.norm(v)) for k, v in pol.theta.items()}
+    assert (sum(v > 0 for v in norms.values()) > 0) == bool(moved)
+    assert pol.meta["num_timesteps"] == 2 * 3 * (ars.n_features("v2") + 1 + 5) * 700
+
+
+def test_policy_file_is_an_ars_file_that_evaluate_names(trained, tmp_path, monkeypatch):
+    f = ars.save_policy(trained, tmp_path / "gn_test_s3.npz")
+    back = ars.load_ars_policy(f)
+    assert back.meta["method"] == "gauss-newton"
+    assert all(np.array_equal(back.theta[k], trained.theta[k]) for k in trained.theta)
+    evaluate = load_script("evaluate")
+    monkeypatch.chdir(tmp_path)
+    assert evaluate.main([str(f), "--episodes", "0", "--baselines", "fixed_winch", "along_cable", "--no-plots",
+                          "--env-kwargs", "episode_seconds:30", "--discard", "10"]) == 0
+    text = (tmp_path / "runs" / "reports" / "gn_test_s3" / "report.md").read_text()
+    assert "Gauss-Newton policy search" in text and "2 Gauss-Newton iterations" in text
+
+
+def test_wave_seeds_are_disjoint_from_every_reserved_set():
+    base = [s for _, s in gym.make(WINCH).unwrapped.eval_sea_states()]
+    reserved = {b + off for b in base for off in list(range(0, 500, 100)) + [500, 700, 900]
+                + list(range(20000, 20500, 100)) + [30000]}
+    ars_training = {ars._train_seed(b, it, sd) for b in base for it in range(100) for sd in range(3)}
+    probes = {b + off + 100 * r for b in base for off in (75000, 76000) for r in range(8)}
+    used = set()
+    for b in base:               # within a (sea state, heading) no two episodes of the search share a wave seed
+        mine = {gn.train_seed(b + 10 * r, it, sd, ls) for r in range(3) for it in range(gn.MAX_ITERATIONS)
+                for sd in range(3) for ls in (False, True)}
+        assert len(mine) == 3 * gn.MAX_ITERATIONS * 3 * 2
+        used |= mine
+    assert not used & (reserved | ars_training | probes)
+    with pytest.raises(ValueError, match="iteration"):
+        gn.train_seed(base[0], gn.MAX_ITERATIONS, 0)
+
+
+@pytest.mark.parametrize("kw, field", [({"iterations": 0}, "iterations"), ({"eps": -1.0}, "eps"),
+                                       ({"ridges": (0.1, 0.0)}, "ridge"), ({"replicates": 0}, "replicates"),
+                                       ({"episode_seconds": 60.0}, "episode_seconds")])
+def test_bad_settings_are_refused_naming_the_field(kw, field):
+    with pytest.raises(ValueError, match=field):
+        gn.train(**kw)
+
+
+def test_command_line_refuses_out_of_range_arguments(capsys):
+    for bad in (["--iterations", str(gn.MAX_ITERATIONS + 1)], ["--eps", "0"], ["--ridges", "-1"],
+                ["--replicates", "0"]):
+        with pytest.raises(SystemExit) as ex:
+            gn.main(bad)
+        assert ex.value.code == 2
+    assert str(gn.default_export(2)) == "runs/gn_WinchPayout-v0_s2.npz"
