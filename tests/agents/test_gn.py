@@ -84,3 +84,25 @@ def test_command_line_refuses_out_of_range_arguments(capsys):
             gn.main(bad)
         assert ex.value.code == 2
     assert str(gn.default_export(2)) == "runs/gn_WinchPayout-v0_s2.npz"
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_committed_policies_ship_load_and_act(seed):
+    """The three committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed
+    ``agents``, load with their recipe (10 iterations, feature set v2, the along-cable table's sea states) and act:
+    inside the action box and not the along-cable law itself."""
+    from pathlib import Path
+
+    import agents
+    from agents.baselines import load_tuned, make_baseline
+    from agents.metrics import rollout
+    pol = ars.load_ars_policy(Path(agents.__file__).parent / "trained" / f"gn_WinchPayout-v0_s{seed}.npz")
+    assert pol.meta["method"] == "gauss-newton" and (pol.meta["seed"], pol.meta["iterations"]) == (seed, 10)
+    assert pol.feature_set == "v2" and set(pol.theta) == set(load_tuned()["along_cable"])
+    env = gym.make(WINCH, episode_seconds=20.0)
+    pol.bind_env(env)
+    sea, s = env.unwrapped.eval_sea_states()[9]
+    a = rollout(env, pol, sea, s + 123456)
+    b = rollout(env, make_baseline("along_cable", env), sea, s + 123456)
+    assert np.all(np.abs(a.data["winch_speed"]) <= env.unwrapped.winch_max_speed + 1e-9)
+    assert not np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
