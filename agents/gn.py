@@ -20,8 +20,8 @@ pitch at every control step — and θ enters linearly into the action. This sea
 The result is an :class:`agents.ars.ARSPolicy` (same features, same file format, ``meta["method"] =
 "gauss-newton"``), so ``scripts/evaluate.py`` and everything that loads ARS policies load it unchanged.
 
-Wave seeds: Jacobian episodes ``1000·code + j + 80000 + 200·iteration + 100000·seed``, line-search episodes the same
-+ 100; iteration < :data:`MAX_ITERATIONS` — never an evaluation (+0…400), tuning (+500), validation (+700), Hover
+Wave seeds: Jacobian episodes ``1000·code + j + 10·replicate + 80000 + 200·iteration + 100000·seed``, line-search
+episodes the same + 100; iteration < :data:`MAX_ITERATIONS`, replicate < 10 — never an evaluation (+0…400), tuning (+500), validation (+700), Hover
 design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training (+40000…, +50000…) or probe (+75000,
 +76000) seed.
 """
@@ -71,8 +71,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
         raise ValueError(f"iterations must be in 1..{MAX_ITERATIONS} (got {iterations})")
     if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
         raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
-    if int(replicates) < 1:
-        raise ValueError(f"replicates must be >= 1 (got {replicates})")
+    if not 1 <= int(replicates) <= 10:
+        raise ValueError(f"replicates must be in 1..10 (got {replicates}; 10·replicate stays below the next seed block)")
     if not episode_seconds > discard + 1.0:
         raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
     t_start = time.perf_counter()
@@ -209,8 +209,8 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
-    if a.replicates < 1 or a.pitch_weight < 0:
-        ap.error("need --replicates >= 1 and --pitch-weight >= 0")
+    if not 1 <= a.replicates <= 10 or a.pitch_weight < 0:
+        ap.error("need 1 <= --replicates <= 10 and --pitch-weight >= 0")
     for name in ("minutes", "eps"):
         v = getattr(a, name)
         if not (math.isfinite(v) and v > 0):

@@ -70,7 +70,7 @@ def test_wave_seeds_are_disjoint_from_every_reserved_set():
 
 
 @pytest.mark.parametrize("kw, field", [({"iterations": 0}, "iterations"), ({"eps": -1.0}, "eps"),
-                                       ({"ridges": (0.1, 0.0)}, "ridge"), ({"replicates": 0}, "replicates"),
+                                       ({"ridges": (0.1, 0.0)}, "ridge"), ({"replicates": 0}, "replicates"), ({"replicates": 11}, "replicates"),
                                        ({"episode_seconds": 60.0}, "episode_seconds")])
 def test_bad_settings_are_refused_naming_the_field(kw, field):
     with pytest.raises(ValueError, match=field):
@@ -79,7 +79,7 @@ def test_bad_settings_are_refused_naming_the_field(kw, field):
 
 def test_command_line_refuses_out_of_range_arguments(capsys):
     for bad in (["--iterations", str(gn.MAX_ITERATIONS + 1)], ["--eps", "0"], ["--ridges", "-1"],
-                ["--replicates", "0"]):
+                ["--replicates", "0"], ["--replicates", "11"]):
         with pytest.raises(SystemExit) as ex:
             gn.main(bad)
         assert ex.value.code == 2
