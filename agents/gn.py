@@ -83,6 +83,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     ev = env.unwrapped.eval_sea_states()
     env.close()
     idx = list(range(len(ev))) if entries is None else [int(i) for i in entries]
+    if not idx or any(not 0 <= i < len(ev) for i in idx):
+        raise ValueError(f"entries must be indices in 0..{len(ev) - 1} of the evaluation list (got {entries})")
     keys = sorted({nearest_key(table, ev[i][0]) for i in idx})
     C, NF, R = len(keys), ars.n_features(feature_set), int(replicates)
     ridges = [float(r) for r in ridges]

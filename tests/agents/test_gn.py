@@ -71,7 +71,8 @@ def test_wave_seeds_are_disjoint_from_every_reserved_set():
 
 @pytest.mark.parametrize("kw, field", [({"iterations": 0}, "iterations"), ({"eps": -1.0}, "eps"),
                                        ({"ridges": (0.1, 0.0)}, "ridge"), ({"replicates": 0}, "replicates"), ({"replicates": 11}, "replicates"),
-                                       ({"episode_seconds": 60.0}, "episode_seconds")])
+                                       ({"episode_seconds": 60.0}, "episode_seconds"), ({"entries": [0, 12]}, "entries"),
+                                       ({"entries": []}, "entries")])
 def test_bad_settings_are_refused_naming_the_field(kw, field):
     with pytest.raises(ValueError, match=field):
         gn.train(**kw)
