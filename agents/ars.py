@@ -66,7 +66,13 @@ GAIN_KEYS = ("g_ff", "tau", "kl", "kp", "kd")
 EXTRA_SCALES = {"winch_speed": (0.0, 0.284), "last_action": (0.0, 0.320), "top_tension": (0.996, 0.178),
                 "cable_angle": (0.467, 0.0533), "fish_pitch_dev": (0.0, 0.0772), "fish_pitch_rate": (0.0, 0.190)}
 #: feature sets: name -> extra instant channels after the v1 features (before the constant)
-FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES)}
+FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES), "v3": tuple(EXTRA_SCALES)}
+#: lagged channels a feature set adds after its extra instant channels: name -> ((channel, lags in control steps),
+#: …). "v3": the policy's own earlier actions (0.2–1.1 s back: with them the residual is a recursive filter, which
+#: can shape its command to the winch's acceleration limit) and the MRU along-cable velocity 2.4–4 s back (a longer
+#: window for the predictor of the tow point's motion). Scaled as the channel's instant or v1 feature.
+LONG_HISTORY = {"v1": (), "v2": (),
+                "v3": (("last_action", (1, 2, 3, 4, 6, 8, 10)), ("tow_vel_along", (24, 28, 32, 36, 40)))}
 #: the feature set of new training runs (policy files without a ``feature_set`` entry are "v1")
 DEFAULT_FEATURE_SET = "v2"
 
@@ -87,8 +93,18 @@ def _require_channels(reader, feature_set: str, who: str):
 
 def feature_names(feature_set: str = "v1") -> list[str]:
     extra = FEATURE_SETS[_check_feature_set(feature_set)]
+    long = [f"{c}@-{lag / 10:.1f}s" for c, lags in LONG_HISTORY[feature_set] for lag in lags]
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
-            + list(extra) + ["const"])
+            + list(extra) + long + ["const"])
+
+
+def _long_scale(c):
+    """(offset, scale) of a LONG_HISTORY channel: its extra-channel scaling, else its v1 feature scale."""
+    return EXTRA_SCALES[c] if c in EXTRA_SCALES else (0.0, FEATURE_SCALES[c])
+
+
+def _long_ring_size(feature_set):
+    return max((max(lags) for _c, lags in LONG_HISTORY[feature_set]), default=0) + 1
 
 
 def n_features(feature_set: str = "v1") -> int:
@@ -170,17 +186,30 @@ def _extra_single(reader, obs, name):
 
 def features_single(reader, obs, scales, hist, feature_set: str = "v1"):
     """φ of one observation given the history ring ``hist`` ((3, N_HISTORY), newest first; None at episode start:
-    filled with the first observation). Returns (φ, new ring). Same arithmetic as the batched :class:`_Batch`."""
+    filled with the first observation; for a feature set with :data:`LONG_HISTORY` a pair (ring, long ring)).
+    Returns (φ, new ring). Same arithmetic as the batched :class:`_Batch`."""
+    long = LONG_HISTORY[feature_set]
+    ring, lring = (hist if long and hist is not None else (hist, None))
     h = np.array([reader(obs, c) / scales[c] for c in HISTORY_CHANNELS])
-    if hist is None:
-        hist = np.repeat(h[:, None], N_HISTORY, axis=1)
+    if ring is None:
+        ring = np.repeat(h[:, None], N_HISTORY, axis=1)
     else:
-        hist = np.roll(hist, 1, axis=1)
-        hist[:, 0] = h
+        ring = np.roll(ring, 1, axis=1)
+        ring[:, 0] = h
     inst = [reader(obs, c) / scales[c] for c in INSTANT_CHANNELS]
     extra = [(_extra_single(reader, obs, c) - EXTRA_SCALES[c][0]) / EXTRA_SCALES[c][1]
              for c in FEATURE_SETS[feature_set]]
-    return np.concatenate([hist[:, list(LAG_STEPS)].reshape(-1), inst, extra, [1.0]]), hist
+    phi = [ring[:, list(LAG_STEPS)].reshape(-1), inst, extra]
+    if long:
+        lh = np.array([(_extra_single(reader, obs, c) - _long_scale(c)[0]) / _long_scale(c)[1] for c, _l in long])
+        if lring is None:
+            lring = np.repeat(lh[:, None], _long_ring_size(feature_set), axis=1)
+        else:
+            lring = np.roll(lring, 1, axis=1)
+            lring[:, 0] = lh
+        phi.append(np.concatenate([lring[i, list(lags)] for i, (_c, lags) in enumerate(long)]))
+        ring = (ring, lring)
+    return np.concatenate(phi + [[1.0]]), ring
 
 
 # ============================================================================ batched rollouts (training)
@@ -192,6 +221,8 @@ class _Batch:
         self.reader = ObsReader(venv.envs[0])
         _require_channels(self.reader, feature_set, "ARS training")
         self.extra = FEATURE_SETS[feature_set]
+        self.long = LONG_HISTORY[feature_set]
+        self.long_size = _long_ring_size(feature_set)
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales
@@ -227,7 +258,18 @@ class _Batch:
         inst = np.stack([self.ch(obs, c) / self.scales[c] for c in INSTANT_CHANNELS], axis=1)
         extra = np.stack([(self.ch_first(obs, c) - EXTRA_SCALES[c][0]) / EXTRA_SCALES[c][1] for c in self.extra],
                          axis=1) if self.extra else np.zeros((n, 0))
-        return np.concatenate([lagged, inst, extra, np.ones((n, 1))], axis=1)
+        parts = [lagged, inst, extra]
+        if self.long:
+            lh = np.stack([(self.ch_first(obs, c) - _long_scale(c)[0]) / _long_scale(c)[1] for c, _l in self.long],
+                          axis=1)
+            if first:
+                self.lring = np.repeat(lh[:, :, None], self.long_size, axis=2)
+            else:
+                self.lring = np.roll(self.lring, 1, axis=2)
+                self.lring[:, :, 0] = lh
+            parts.append(np.concatenate([self.lring[:, i, list(lags)] for i, (_c, lags) in enumerate(self.long)],
+                                        axis=1))
+        return np.concatenate(parts + [np.ones((n, 1))], axis=1)
 
 
 def rollout_series(venv, batch: _Batch, seas, seeds, theta):
@@ -380,6 +422,8 @@ def save_policy(policy: ARSPolicy, path: str | Path) -> Path:
     meta = dict(policy.meta) | {"feature_set": fs, "features": feature_names(fs), "lag_steps": list(LAG_STEPS),
                                 "history_channels": list(HISTORY_CHANNELS),
                                 "instant_channels": list(INSTANT_CHANNELS) + list(FEATURE_SETS[fs])}
+    if LONG_HISTORY[fs]:
+        meta["long_history"] = [[c, list(lags)] for c, lags in LONG_HISTORY[fs]]
     if fs != "v1":
         meta["extra_scales"] = {c: list(EXTRA_SCALES[c]) for c in FEATURE_SETS[fs]}
     return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta)

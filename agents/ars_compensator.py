@@ -66,7 +66,7 @@ import numpy as np
 from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset_copies, save_ars_file
 
 __all__ = ["ARSCompensatorPolicy", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
-           "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
+           "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
            "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
            "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "entry_hit_weights", "parse_hit_weights",
            "main"]
@@ -315,13 +315,12 @@ class _Batch:
                         axis=1)
 
 
-def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0, record_actions: bool = False,
-                  margin_start: float = DEFAULT_MARGIN_START, stop_guard: float = 0.0):
+def rollout_series(venv, batch: _Batch, seas, seeds, theta, record_actions: bool = False, stop_guard: float = 0.0):
     """One episode in every copy of ``venv`` (copy i in (seas[i], seeds[i]) with weights theta[i], (2, F), and the
-    stop guard ``stop_guard``); returns σ(fish heave) (m) and σ(pitch) (deg) over t ≥ discard, the end-stop hits of
-    the whole episode and the mean over t ≥ discard of :func:`margin_penalty` (|s|, ``margin_start``) of the
-    ``comp_stroke`` observation after every step, per copy (σ and margin NaN for a copy that ended early), and
-    with ``record_actions`` the actions (T, n, 2) as stepped."""
+    stop guard ``stop_guard``); returns per control step the fish heave (m), pitch (rad) and the ``comp_stroke``
+    observation after the step (fraction of the half stroke), ``(T, n)`` each, the time of each step, the end-stop
+    hits of the whole episode and a per-copy flag of copies that ended early (and with ``record_actions`` the
+    actions (T, n, 2) as stepped)."""
     n = venv.num_envs
     theta = np.asarray(theta, float)
     obs = reset_copies(venv, seas, seeds)
@@ -329,8 +328,8 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
     T = venv.envs[0].max_steps
     H = np.zeros((T, n))
     P = np.zeros((T, n))
+    S = np.zeros((T, n))
     t = np.zeros(T)
-    M = np.zeros((T, n))
     hits = np.zeros(n)
     ended = np.zeros(n, bool)
     acts = np.zeros((T, n, N_ACT), np.float32) if record_actions else None
@@ -343,15 +342,25 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
         obs, _r, term, trunc, infos = venv.step(a)
         H[k] = infos["fish_heave"]
         P[k] = infos["fish_pitch"]
-        M[k] = margin_penalty(batch.reader.batch(obs, "comp_stroke"), margin_start)
+        S[k] = batch.reader.batch(obs, "comp_stroke")
         t[k] = infos["t"][0]
         hits += np.where(ended, 0, infos["end_stop_hits"])
         if k < T - 1:
             ended |= term | trunc
+    return H, P, S, t, hits, ended, acts
+
+
+def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0, record_actions: bool = False,
+                  margin_start: float = DEFAULT_MARGIN_START, stop_guard: float = 0.0):
+    """One episode in every copy of ``venv`` (:func:`rollout_series`); returns σ(fish heave) (m) and σ(pitch) (deg)
+    over t ≥ discard, the end-stop hits of the whole episode and the mean over t ≥ discard of
+    :func:`margin_penalty` (|s|, ``margin_start``) of the ``comp_stroke`` observation after every step, per copy
+    (σ and margin NaN for a copy that ended early), and with ``record_actions`` the actions (T, n, 2) as stepped."""
+    H, P, S, t, hits, ended, acts = rollout_series(venv, batch, seas, seeds, theta, record_actions, stop_guard)
     w = t >= discard
     sh = H[w].std(axis=0)
     sp = np.degrees(P[w].std(axis=0))
-    mg = M[w].mean(axis=0)
+    mg = margin_penalty(S[w], margin_start).mean(axis=0)
     sh[ended] = np.nan
     sp[ended] = np.nan
     mg[ended] = np.nan

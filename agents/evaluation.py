@@ -234,19 +234,24 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
         if hasattr(pol, "bind_env"):        # a policy that reads the sea-state estimate (agents.ars.ARSPolicy)
             pol.bind_env(penv)
         desc = f"{meta.get('algo', '?').upper()} policy"
+        gn = meta.get("method") == "gauss-newton"
+        hp = meta.get("hyperparameters") or {}
+        start = (f" after {hp['init']}" if gn and hp.get("init") else "")
         if meta.get("algo") == "ars":
             fs = meta.get("feature_set", "v1")
             more = ("" if fs == "v1" else " and the winch speed, last action, top tension, cable angle, fish pitch "
-                    "and pitch rate")
-            gn = meta.get("method") == "gauss-newton"
+                    "and pitch rate") + (" and its own earlier actions and a longer MRU velocity history"
+                                         if fs == "v3" else "")
             if gn:
                 desc = "Gauss-Newton policy search (the ARS policy class)"
             desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
-                     f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations, training seed "
-                     f"{meta.get('seed', '?')})")
+                     f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
+                     f"seed {meta.get('seed', '?')})")
         elif meta.get("algo") == "ars_skyhook":
-            desc = ("ARS policy, linear residual on `skyhook` over the tow-point heave history and stroke features "
-                    f"({meta.get('iterations', '?')} ARS iterations, training seed {meta.get('seed', '?')})")
+            desc = ("Gauss-Newton policy search (the ARS compensator policy class)" if gn else "ARS policy") + (
+                    ", linear residual on `skyhook` over the tow-point heave history and stroke features "
+                    f"({meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
+                    f"seed {meta.get('seed', '?')})")
         for w in meta.get("env_wrapper") or []:
             if isinstance(w, dict):
                 for wn, wkw in w.items():

@@ -36,7 +36,7 @@ import numpy as np
 from . import ars
 from .common import nearest_key
 
-__all__ = ["train", "train_seed", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
+__all__ = ["train", "train_seed", "initial_theta", "gauss_newton_steps", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
 
 #: wave seeds of the search: base seed (1000·code + j) + SEED_OFFSET + 200·iteration (+ 100 for the line search)
 #: + 100000·training seed
@@ -51,6 +51,47 @@ def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = Fa
     return int(base_seed) + SEED_OFFSET + 200 * int(iteration) + (100 if line_search else 0) + 100000 * int(seed)
 
 
+def initial_theta(init, keys, feature_set: str) -> np.ndarray:
+    """θ (len(keys), n_features(feature_set)) to start from: zeros (the along-cable law), or ``init``'s weights copied
+    by feature name (features ``init`` does not have start at 0)."""
+    theta = np.zeros((len(keys), ars.n_features(feature_set)))
+    if init is None:
+        return theta
+    names, inames = ars.feature_names(feature_set), ars.feature_names(init.feature_set)
+    missing = [k for k in keys if k not in init.theta]
+    if missing:
+        raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
+    for c, k in enumerate(keys):
+        for i, nm in enumerate(names):
+            if nm in inames:
+                theta[c, i] = init.theta[k][inames.index(nm)]
+    return theta
+
+
+def gauss_newton_steps(terms, code, ok, n_codes: int, ridges) -> np.ndarray:
+    """Ridge-regularised Gauss–Newton steps per sea state (module docstring, step 2): for every sea state c,
+    Δθ(λ) = −(A + λ·tr(A)/NF·I)⁻¹ b with A = Σ_terms Σ_e w_e J_eᵀJ_e, b = Σ_terms Σ_e w_e J_eᵀ r_e over the episodes e
+    of c that are ``ok``. ``terms``: (J (T, NF, n_ep), r (T, n_ep), w (n_ep,)) per residual series; ``code``: the
+    sea-state index of every episode. Returns (len(ridges), n_codes, NF) (zero rows for a sea state without
+    episodes)."""
+    NF = terms[0][0].shape[1]
+    steps = np.zeros((len(ridges), n_codes, NF))
+    for c in range(n_codes):
+        es = np.flatnonzero((code == c) & ok)
+        if es.size == 0:
+            continue
+        A = np.zeros((NF, NF))
+        b = np.zeros(NF)
+        for e in es:
+            for J, r, w in terms:
+                A += J[:, :, e].T @ J[:, :, e] * w[e]
+                b += J[:, :, e].T @ r[:, e] * w[e]
+        d = np.trace(A) / NF
+        for j, lam in enumerate(ridges):
+            steps[j, c] = -np.linalg.solve(A + lam * d * np.eye(NF), b)
+    return steps
+
+
 def _cost(sh, sp, sh_ref, sp_ref, pitch_weight, fail_penalty=1.0):
     c = np.log(sh / sh_ref) + pitch_weight * np.log(sp / sp_ref)
     return np.where(np.isfinite(c), c, fail_penalty)
@@ -59,10 +100,12 @@ def _cost(sh, sp, sh_ref, sp_ref, pitch_weight, fail_penalty=1.0):
 def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates: int = 1, eps: float = 0.005,
           ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, episode_seconds: float = 180.0,
           discard: float = 60.0, feature_set: str = ars.DEFAULT_FEATURE_SET, entries=None, progress: bool = True,
-          log=print) -> ars.ARSPolicy:
-    """Gauss–Newton search (module docstring) from θ = 0 (the along-cable law). Stops after ``iterations`` or when
-    the next iteration would pass ``minutes`` of wall time. ``entries``: indices into the evaluation (sea state,
-    heading) list to train on (default all 12)."""
+          log=print, init: ars.ARSPolicy | None = None) -> ars.ARSPolicy:
+    """Gauss–Newton search (module docstring) from θ = 0 (the along-cable law), or from the policy ``init`` (an
+    :class:`agents.ars.ARSPolicy` of any feature set: its weights are copied by feature name, features it does not
+    have start at 0; its along-cable table is kept; the iterations continue its count, so the wave seeds are fresh).
+    Stops after ``iterations`` more or when the next iteration would pass ``minutes`` of wall time. ``entries``:
+    indices into the evaluation (sea state, heading) list to train on (default all 12)."""
     import gymnasium as gym
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import WinchPayoutVectorEnv
@@ -76,7 +119,12 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     if not episode_seconds > discard + 1.0:
         raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
     t_start = time.perf_counter()
-    table = dict(load_tuned().get("along_cable") or {})
+    gn_init = init is not None and init.meta.get("method") == "gauss-newton"
+    first = int(init.meta.get("iterations", 0) + init.meta.get("first_iteration", 0)) if gn_init else 0
+    if first + int(iterations) > MAX_ITERATIONS:
+        raise ValueError(f"iterations: the initial policy has {first} iterations; {first} + {iterations} exceeds "
+                         f"{MAX_ITERATIONS} (the seed blocks)")
+    table = dict(init.base_table) if init is not None else dict(load_tuned().get("along_cable") or {})
     if not table:
         raise RuntimeError("no tuned along_cable table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
     env = gym.make(ars.ENV_ID)
@@ -96,13 +144,13 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     scales = dict(ars.FEATURE_SCALES)
     batch_j = ars._Batch(venv_j, table, scales, feature_set)
     batch_l = ars._Batch(venv_l, table, scales, feature_set)
-    theta = np.zeros((C, NF))
+    theta = initial_theta(init, keys, feature_set)
     curve = []
     log(f"[gn] seed {seed}: {C} sea states, {NF} features each; per iteration {n_ep} episodes x ({NF} + 1) for the "
         f"Jacobian and {n_ep} x ({len(ridges)} ridges + current + along_cable) for the line search, "
         f"{episode_seconds:g} s each; eps={eps} ridges={ridges} pitch_weight={pitch_weight}")
-    it, last = 0, 0.0
-    while it < iterations:
+    it, last = first, 0.0
+    while it < first + iterations:
         if time.perf_counter() - t_start + last > 60.0 * minutes:
             break
         t0 = time.perf_counter()
@@ -127,19 +175,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
         sy, sq = y0.std(axis=0), q0.std(axis=0)
         ok = ~ended.reshape(NF + 1, n_ep).any(axis=0) & (sy > 0) & (sq > 0)
         # 2. Gauss–Newton steps per sea state and ridge
-        steps = np.zeros((len(ridges), C, NF))
-        for c in range(C):
-            es = np.flatnonzero((code == c) & ok)
-            if es.size == 0:
-                continue
-            A = np.zeros((NF, NF))
-            b = np.zeros(NF)
-            for e in es:
-                A += Jy[:, :, e].T @ Jy[:, :, e] / sy[e] ** 2 + pitch_weight * Jq[:, :, e].T @ Jq[:, :, e] / sq[e] ** 2
-                b += Jy[:, :, e].T @ y0[:, e] / sy[e] ** 2 + pitch_weight * Jq[:, :, e].T @ q0[:, e] / sq[e] ** 2
-            d = np.trace(A) / NF
-            for j, lam in enumerate(ridges):
-                steps[j, c] = -np.linalg.solve(A + lam * d * np.eye(NF), b)
+        steps = gauss_newton_steps([(Jy, y0, 1.0 / sy ** 2), (Jq, q0, pitch_weight / sq ** 2)], code, ok, C,
+                                   ridges)
         # 3. line search on fresh episodes: along_cable, θ, θ + Δθ(λ) for every λ, on the same waves
         seeds_l = [train_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
         cand = np.concatenate([np.zeros((1, n_ep, NF)), theta[code][None], theta[code][None] + steps[:, code]])
@@ -178,11 +215,13 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     venv_l.close()
     wall = time.perf_counter() - t_start
     meta = {"algo": "ars", "method": "gauss-newton", "env_id": ars.ENV_ID, "env_kwargs": {},
-            "feature_set": feature_set, "seed": int(seed), "iterations": it,
-            "num_timesteps": it * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
+            "feature_set": feature_set, "seed": int(seed), "iterations": it - first, "first_iteration": first,
+            "num_timesteps": (it - first) * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
             "hyperparameters": {"iterations": iterations, "minutes": minutes, "replicates": R, "eps": eps,
                                 "ridges": ridges, "pitch_weight": pitch_weight, "episode_seconds": episode_seconds,
-                                "discard": discard, "entries": idx},
+                                "discard": discard, "entries": idx,
+                                "init": init.name if init is not None else None},
+            "init_num_timesteps": int(init.meta.get("num_timesteps", 0)) if init is not None else 0,
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)}",
             "curve": curve}
@@ -190,8 +229,9 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
                          name=f"gn_s{seed}", feature_set=feature_set)
 
 
-def default_export(seed: int) -> Path:
-    return Path("runs") / f"gn_WinchPayout-v0_s{int(seed)}.npz"
+def default_export(seed: int, feature_set: str = "v2") -> Path:
+    prefix = "gn" if feature_set in ("v1", "v2") else f"gn{feature_set[1:]}"
+    return Path("runs") / f"{prefix}_WinchPayout-v0_s{int(seed)}.npz"
 
 
 def main(argv=None) -> int:
@@ -207,7 +247,12 @@ def main(argv=None) -> int:
     ap.add_argument("--ridges", type=float, nargs="+", default=[0.01, 0.1, 1.0],
                     help="ridge weights tried by the line search (relative to the normal matrix's mean diagonal)")
     ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
-    ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz)")
+    ap.add_argument("--features", choices=sorted(ars.FEATURE_SETS), default=ars.DEFAULT_FEATURE_SET,
+                    help=f"feature set (agents/ars.py; default {ars.DEFAULT_FEATURE_SET})")
+    ap.add_argument("--init", default=None, help="start from this ARS/GN policy file (weights copied by feature "
+                                                 "name, new features at 0; a GN file's iteration count continues)")
+    ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz, "
+                                                  "gn3_... for feature set v3)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
@@ -219,8 +264,18 @@ def main(argv=None) -> int:
             ap.error(f"--{name} must be a positive number (got {v})")
     if any(not (math.isfinite(r) and r > 0) for r in a.ridges):
         ap.error(f"--ridges must be positive numbers (got {a.ridges})")
-    out = Path(a.export or default_export(a.seed))
-    pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight)
+    init = None
+    if a.init:
+        try:
+            init = ars.load_ars_policy(a.init)
+        except (OSError, ValueError, KeyError) as e:
+            ap.error(f"--init: {e}")
+    out = Path(a.export or default_export(a.seed, a.features))
+    try:
+        pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight,
+                    feature_set=a.features, init=init)
+    except ValueError as e:
+        ap.error(str(e))
     ars.save_policy(pol, out)
     print(f"[gn] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
     return 0

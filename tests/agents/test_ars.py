@@ -48,10 +48,11 @@ def test_zero_weights_are_the_along_cable_law(env):
     assert np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
 
 
-@pytest.mark.parametrize("feature_set", ["v1", "v2"])
+@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, feature_set):
-    """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off (both
-    feature sets: v2 adds winch speed, last action, top tension, cable angle, fish pitch and its rate)."""
+    """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off (every
+    feature set: v2 adds winch speed, last action, top tension, cable angle, fish pitch and its rate; v3 the
+    policy's own earlier actions and the MRU velocity 2.4–4 s back)."""
     from towenv.envs.vector import WinchPayoutVectorEnv
     pol = _policy(scale=0.02, feature_set=feature_set).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
@@ -95,6 +96,35 @@ def test_v2_features_are_the_observed_channels(env):
     assert phi2[names.index("last_action")] * ars.EXTRA_SCALES["last_action"][1] == pytest.approx(0.4, abs=1e-6)
 
 
+def test_v3_long_history_features_are_the_lagged_channels(env):
+    """v3 = the v2 vector with, before the constant, the policy's own earlier actions and the MRU along-cable
+    velocity further back: feature ``c@-L s`` is channel c as observed L s (L/0.1 control steps) before the current
+    observation, scaled as its instant/v1 feature, and the first observation fills the ring at episode start."""
+    from agents.common import ObsReader
+    reader = ObsReader(env)
+    sea, seed = env.unwrapped.eval_sea_states()[7]
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    names3, names2 = ars.feature_names("v3"), ars.feature_names("v2")
+    hist = hist2 = None
+    seen = []
+    for k in range(45):
+        phi3, hist = ars.features_single(reader, obs, ars.FEATURE_SCALES, hist, "v3")
+        phi2, hist2 = ars.features_single(reader, obs, ars.FEATURE_SCALES, hist2, "v2")
+        seen.append(obs.copy())
+        assert names3[:len(names2) - 1] == names2[:-1] and len(names3) == ars.n_features("v3") == len(phi3)
+        assert np.array_equal(phi3[:len(phi2) - 1], phi2[:-1]) and phi3[-1] == 1.0      # the v2 vector in front
+        for c, lags in ars.LONG_HISTORY["v3"]:
+            off, sc = ars._long_scale(c)
+            for lag in lags:
+                x = phi3[names3.index(f"{c}@-{lag / 10:.1f}s")] * sc + off
+                want = float(np.asarray(reader(seen[max(k - lag, 0)], c)).reshape(-1)[0])
+                assert x == pytest.approx(want, rel=1e-12, abs=1e-12)
+        obs, *_ = env.step(np.array([0.6 * np.sin(0.3 * k)], np.float32))
+    # last_action 0.1 s back is the action handed two steps before the current observation
+    assert phi3[names3.index("last_action@-0.1s")] * ars.EXTRA_SCALES["last_action"][1] == pytest.approx(
+        0.6 * np.sin(0.3 * 42), abs=1e-6)
+
+
 def test_policy_is_causal(env):
     """The actions depend only on the observations handed to predict() (and the sea-state estimate): replaying
     a recorded observation sequence to a fresh policy bound to another environment, whose simulator is in an
@@ -124,7 +154,7 @@ def test_policy_is_causal(env):
     other.close()
 
 
-@pytest.mark.parametrize("feature_set", ["v1", "v2"])
+@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3"])
 def test_policy_file_round_trip_and_refusal(tmp_path, env, feature_set):
     pol = _policy(scale=0.01, seed=3, feature_set=feature_set)
     f = ars.save_policy(pol, tmp_path / "p.npz")
@@ -234,3 +264,22 @@ def test_committed_v2_policies_ship_load_and_act(env, seed):
     b = rollout(env, make_baseline("along_cable", env), sea, s + 123456)
     assert np.all(np.isfinite(a.data["winch_speed"])) and np.all(np.abs(a.data["winch_speed"]) <= env.unwrapped.winch_max_speed + 1e-9)
     assert not np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
+
+
+def test_compare_script_scores_policies_against_along_cable(tmp_path, capsys):
+    """scripts/compare_winch_policies.py: θ = 0 is the along-cable law (+0.00 %), a policy of another feature set
+    is scored in the same batch, and files that are not policies are refused with exit 2."""
+    zero = ars.save_policy(_policy(scale=0.0, feature_set="v2"), tmp_path / "zero.npz")
+    other = ars.save_policy(_policy(scale=0.02, feature_set="v3"), tmp_path / "v3.npz")
+    compare = load_script("compare_winch_policies")
+    assert compare.main([str(zero), str(other), "--replicates", "1", "--episode-seconds", "64"]) == 0
+    out = capsys.readouterr().out
+    line0 = next(x for x in out.splitlines() if x.startswith(str(zero)))
+    assert "heave  +0.00 %" in line0 and line0.count("+0.00 %") == 5          # pooled, codes 3-5, pitch
+    line1 = next(x for x in out.splitlines() if x.startswith(str(other)))
+    assert "heave  +0.00 %" not in line1
+    (tmp_path / "bad.npz").write_text("no")
+    for bad in ([str(tmp_path / "bad.npz")], [str(zero), "--replicates", "9"], [str(zero), "--episode-seconds", "30"]):
+        with pytest.raises(SystemExit) as ex:
+            compare.main(bad)
+        assert ex.value.code == 2

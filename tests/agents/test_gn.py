@@ -78,13 +78,48 @@ def test_bad_settings_are_refused_naming_the_field(kw, field):
         gn.train(**kw)
 
 
+def test_initial_theta_copies_weights_by_feature_name(trained):
+    """A warm start keeps the initial policy's weights on the features both sets have (by name: the v3 set inserts
+    its long history before the constant) and starts the new ones at 0; no init is θ = 0 (the along-cable law)."""
+    keys = sorted(trained.theta)
+    assert not gn.initial_theta(None, keys, "v3").any()
+    th = gn.initial_theta(trained, keys, "v3")
+    n2, n3 = ars.feature_names("v2"), ars.feature_names("v3")
+    for c, k in enumerate(keys):
+        for i, nm in enumerate(n3):
+            assert th[c, i] == (trained.theta[k][n2.index(nm)] if nm in n2 else 0.0)
+    assert np.array_equal(gn.initial_theta(trained, keys, "v2"), np.array([trained.theta[k] for k in keys]))
+    with pytest.raises(ValueError, match="no weights for sea states"):
+        gn.initial_theta(trained, keys + ["hs9.99_tp9.99"], "v3")
+
+
+def test_warm_start_continues_the_iteration_count_and_its_seeds(trained, monkeypatch):
+    """Training from a Gauss-Newton policy continues its iteration count (fresh wave seeds: iteration 2 onwards
+    after a 2-iteration policy) and records where it started; a start past the seed blocks is refused."""
+    used = []
+    real = gn.train_seed
+    monkeypatch.setattr(gn, "train_seed", lambda b, it, sd, line_search=False: used.append(it) or real(b, it, sd,
+                                                                                                       line_search))
+    pol = gn.train(seed=3, iterations=1, entries=[4], episode_seconds=62.0, discard=60.0, progress=False,
+                   feature_set="v3", init=trained)
+    assert set(used) == {2} and pol.meta["first_iteration"] == 2 and pol.meta["iterations"] == 1
+    assert pol.meta["curve"][0]["iteration"] == 2 and pol.feature_set == "v3"
+    assert pol.meta["hyperparameters"]["init"] == trained.name and pol.meta["init_num_timesteps"] > 0
+    with pytest.raises(ValueError, match="iterations"):
+        gn.train(iterations=gn.MAX_ITERATIONS - 1, init=trained)
+
+
 def test_command_line_refuses_out_of_range_arguments(capsys):
     for bad in (["--iterations", str(gn.MAX_ITERATIONS + 1)], ["--eps", "0"], ["--ridges", "-1"],
                 ["--replicates", "0"], ["--replicates", "11"]):
         with pytest.raises(SystemExit) as ex:
             gn.main(bad)
         assert ex.value.code == 2
+    with pytest.raises(SystemExit) as ex:
+        gn.main(["--init", "no_such_policy.npz"])
+    assert ex.value.code == 2 and "--init" in capsys.readouterr().err
     assert str(gn.default_export(2)) == "runs/gn_WinchPayout-v0_s2.npz"
+    assert str(gn.default_export(1, "v3")) == "runs/gn3_WinchPayout-v0_s1.npz"
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
