@@ -1,0 +1,273 @@
+"""Gauss–Newton policy search for the CompensatorGains linear residual over skyhook (the policy class of
+``agents/ars_compensator.py``), the method of :mod:`agents.gn` applied to the semi-active compensator.
+
+Per iteration:
+
+1. **Jacobian by finite differences on the simulator.** The batch of training episodes (one per (sea state,
+   heading) and replicate; fresh wave seeds every iteration) runs once with Θ and once per weight with that weight
+   + ε (all 2 × n_features weights of Θ, the stiffness and the damping rows; every sea state's Θ perturbed in the
+   same copy). J = (y(Θ + ε e_i) − y(Θ))/ε for three series over the scored window: fish heave and pitch (window
+   mean removed) and the stroke margin m_t = max(|s_t| − m0, 0) (s = stroke / half stroke). The closed loop —
+   skyhook switching, the stop guard, end-stop impacts — is inside J (the secant of the deterministic simulator).
+2. **Gauss–Newton step per sea state** (:func:`agents.gn.gauss_newton_steps`): the linearisation of the ARS
+   compensator cost ln σ_h + w_p ln σ_θ + w_margin · mean_t m_t², i.e. Σ_e ‖y_e + J Δ‖²/σ_h,e² +
+   w_p ‖q_e + J^q Δ‖²/σ_θ,e² + 2 w_margin ‖m_e + J^m Δ‖², for each ridge λ in ``ridges``. The end-stop hit count
+   is not differentiable: it enters through the margin series here and through step 3.
+3. **Line search on fresh episodes**: skyhook, Θ and Θ + Δ(λ) for every λ on the same waves; per sea state keep the
+   candidate with the lowest mean ARS compensator cost (:mod:`agents.ars_compensator`: log σ ratios to skyhook,
+   w_hit · hits, w_margin · margin) — no step if none beats the current Θ.
+
+The result is an :class:`agents.ars_compensator.ARSCompensatorPolicy` (same features, stop guard and file format,
+``meta["method"] = "gauss-newton"``), so ``scripts/evaluate.py`` loads it unchanged. It starts from Θ = 0 (skyhook)
+or from a policy file (``init``: its Θ, base table and stop guard are kept).
+
+Wave seeds: Jacobian episodes ``1000·code + j + 10·replicate + 62000 + 200·iteration + 100000·seed``, line-search
+episodes the same + 100; iteration < :data:`MAX_ITERATIONS`, replicate < 10 — never an evaluation (+0…400), tuning
+(+500), validation (+700), Hover design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training
+(+40000…, +50000…), probe (+75000, +76000) or WinchPayout Gauss–Newton (+80000…) seed.
+"""
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import ars_compensator as arc
+from .common import nearest_key
+from .gn import gauss_newton_steps
+
+__all__ = ["train", "train_seed", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
+
+#: wave seeds of the search: base seed (1000·code + j) + SEED_OFFSET + 200·iteration (+ 100 for the line search)
+#: + 10·replicate + 100000·training seed
+SEED_OFFSET = 62000
+#: 200·iteration + 100 + 10·replicate stays below 10000: a run's seeds stay inside its own block
+MAX_ITERATIONS = 49
+
+
+def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = False) -> int:
+    if not 0 <= int(iteration) < MAX_ITERATIONS:
+        raise ValueError(f"iteration must be in 0..{MAX_ITERATIONS - 1} (got {iteration})")
+    return int(base_seed) + SEED_OFFSET + 200 * int(iteration) + (100 if line_search else 0) + 100000 * int(seed)
+
+
+def _costs(sh, sp, hits, mg, pitch_weight, hit_weight, margin_weight, fail_penalty=1.0):
+    """ARS compensator cost (:mod:`agents.ars_compensator`) of candidate rows 1… of (candidates, episodes) arrays
+    against row 0 (skyhook) on the same waves: ln σ_h ratio + w_p ln σ_θ ratio + w_hit · hits + w_margin · margin;
+    ``fail_penalty`` for an episode that ended early."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = (np.log(sh[1:] / sh[0]) + pitch_weight * np.log(sp[1:] / sp[0]) + hit_weight * hits[1:]
+             + margin_weight * mg[1:])
+    return np.where(np.isfinite(c), c, fail_penalty)
+
+
+def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates: int = 1, eps: float = 0.01,
+          ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, hit_weight: float = arc.DEFAULT_HIT_WEIGHT,
+          margin_weight: float = arc.DEFAULT_MARGIN_WEIGHT, margin_start: float = arc.DEFAULT_MARGIN_START,
+          stop_guard: float | None = None, episode_seconds: float = 180.0, discard: float = 60.0, entries=None,
+          init: arc.ARSCompensatorPolicy | None = None, progress: bool = True,
+          log=print) -> arc.ARSCompensatorPolicy:
+    """Gauss–Newton search (module docstring) from Θ = 0 (skyhook) or from ``init``. Stops after ``iterations``
+    (continuing a Gauss–Newton ``init``'s count, so its wave seeds stay fresh) or when the next iteration would pass
+    ``minutes`` of wall time. ``stop_guard``: None = the init's (0 without init). ``entries``: indices into the
+    evaluation (sea state, heading) list to train on (default all 12)."""
+    import gymnasium as gym
+    __import__("towenv")
+    from towenv.envs.vector import CompensatorGainsVectorEnv
+    from .baselines import load_tuned
+    if not 1 <= int(iterations) <= MAX_ITERATIONS:
+        raise ValueError(f"iterations must be in 1..{MAX_ITERATIONS} (got {iterations})")
+    if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
+        raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
+    if not 1 <= int(replicates) <= 10:
+        raise ValueError(f"replicates must be in 1..10 (got {replicates}; 10·replicate stays below the next seed block)")
+    if not episode_seconds > discard + 1.0:
+        raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
+    for name, v in (("pitch_weight", pitch_weight), ("hit_weight", hit_weight), ("margin_weight", margin_weight)):
+        if not (math.isfinite(v) and v >= 0):
+            raise ValueError(f"{name} must be a finite number >= 0 (got {v})")
+    guard = float(init.stop_guard if init is not None else 0.0) if stop_guard is None else float(stop_guard)
+    if not 0.0 <= guard <= 1.0:
+        raise ValueError(f"stop_guard must be 0 (off) or in (0, 1] (got {guard})")
+    t_start = time.perf_counter()
+    gn_init = init is not None and init.meta.get("method") == "gauss-newton"
+    first = int(init.meta.get("iterations", 0) + init.meta.get("first_iteration", 0)) if gn_init else 0
+    if first + int(iterations) > MAX_ITERATIONS:
+        raise ValueError(f"iterations: the initial policy has {first} iterations; {first} + {iterations} exceeds "
+                         f"{MAX_ITERATIONS} (the seed blocks)")
+    table = dict(init.base_table) if init is not None else dict(load_tuned().get("skyhook") or {})
+    if not table:
+        raise RuntimeError("no tuned skyhook table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
+    env = gym.make(arc.ENV_ID)
+    ev = env.unwrapped.eval_sea_states()
+    env.close()
+    idx = list(range(len(ev))) if entries is None else [int(i) for i in entries]
+    if not idx or any(not 0 <= i < len(ev) for i in idx):
+        raise ValueError(f"entries must be indices in 0..{len(ev) - 1} of the evaluation list (got {entries})")
+    keys = sorted({nearest_key(table, ev[i][0]) for i in idx})
+    C, NA, NF, R = len(keys), arc.N_ACT, arc.N_FEATURES, int(replicates)
+    NW = NA * NF
+    theta = np.zeros((C, NA, NF))
+    if init is not None:
+        missing = [k for k in keys if k not in init.theta]
+        if missing:
+            raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
+        theta = np.array([init.theta[k] for k in keys], float)
+    ridges = [float(r) for r in ridges]
+    n_ep = len(idx) * R
+    n_jac, n_ls = n_ep * (NW + 1), n_ep * (len(ridges) + 2)
+    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds))
+    venv_j = CompensatorGainsVectorEnv(num_envs=n_jac, **kw)
+    venv_l = CompensatorGainsVectorEnv(num_envs=n_ls, **kw)
+    scales = dict(init.scales) if init is not None else dict(arc.FEATURE_SCALES)
+    batch_j = arc._Batch(venv_j, table, scales)
+    batch_l = arc._Batch(venv_l, table, scales)
+    curve = []
+    log(f"[gn_comp] seed {seed}: {C} sea states, {NA} x {NF} weights each; per iteration {n_ep} episodes x ({NW} + 1) "
+        f"for the Jacobian and {n_ep} x ({len(ridges)} ridges + current + skyhook) for the line search, "
+        f"{episode_seconds:g} s each; eps={eps} ridges={ridges} pitch_weight={pitch_weight} hit_weight={hit_weight} "
+        f"margin_weight={margin_weight} margin_start={margin_start} stop_guard={guard}"
+        + (f"; from {init.name} (iteration {first})" if init is not None else ""))
+    it, last = first, 0.0
+    while it < first + iterations:
+        if time.perf_counter() - t_start + last > 60.0 * minutes:
+            break
+        t0 = time.perf_counter()
+        ents = [(ev[i][0], ev[i][1]) for _r in range(R) for i in idx]
+        reps = [r for r in range(R) for _i in idx]
+        code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
+        seas = [sea for sea, _s in ents]
+        # 1. Jacobian: copy block 0 runs Θ, block i + 1 runs Θ + ε e_i (flat index i over the 2 x NF weights)
+        seeds = [train_seed(s + 10 * r, it, seed) for (_sea, s), r in zip(ents, reps)]
+        th = np.repeat(theta[code].reshape(n_ep, NW)[None], NW + 1, axis=0)
+        for i in range(NW):
+            th[i + 1, :, i] += eps
+        H, P, S, t, _hits, ended, _a = arc.rollout_series(venv_j, batch_j, seas * (NW + 1), seeds * (NW + 1),
+                                                          th.reshape(-1, NA, NF), stop_guard=guard)
+        w = t >= discard
+        Y = H[w].reshape(-1, NW + 1, n_ep)
+        Q = P[w].reshape(-1, NW + 1, n_ep)
+        M = arc.margin_penalty(S[w], margin_start).reshape(-1, NW + 1, n_ep) ** 0.5      # m_t = max(|s| − m0, 0)
+        Y = Y - Y.mean(axis=0)
+        Q = Q - Q.mean(axis=0)
+        y0, q0, m0 = Y[:, 0], Q[:, 0], M[:, 0]
+        Jy = (Y[:, 1:] - y0[:, None]) / eps
+        Jq = (Q[:, 1:] - q0[:, None]) / eps
+        Jm = (M[:, 1:] - m0[:, None]) / eps
+        sy, sq = y0.std(axis=0), q0.std(axis=0)
+        ok = ~ended.reshape(NW + 1, n_ep).any(axis=0) & (sy > 0) & (sq > 0)
+        # 2. Gauss–Newton steps per sea state and ridge
+        steps = gauss_newton_steps([(Jy, y0, 1.0 / sy ** 2), (Jq, q0, pitch_weight / sq ** 2),
+                                    (Jm, m0, np.full(n_ep, 2.0 * margin_weight))], code, ok, C, ridges)
+        # 3. line search on fresh episodes: skyhook, Θ, Θ + Δ(λ) for every λ, on the same waves
+        seeds_l = [train_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
+        flat = theta[code].reshape(n_ep, NW)
+        cand = np.concatenate([np.zeros((1, n_ep, NW)), flat[None], flat[None] + steps[:, code]])
+        sh, sp, hits, mg = arc.rollout_batch(venv_l, batch_l, seas * len(cand), seeds_l * len(cand),
+                                             cand.reshape(-1, NA, NF), discard=discard, margin_start=margin_start,
+                                             stop_guard=guard)
+        shape = (len(cand), n_ep)
+        sh, sp, hits, mg = sh.reshape(shape), sp.reshape(shape), hits.reshape(shape), mg.reshape(shape)
+        cost = _costs(sh, sp, hits, mg, pitch_weight, hit_weight, margin_weight)
+        picks = []
+        for c in range(C):
+            m = code == c
+            cc = cost[:, m].mean(axis=1)           # current Θ, then one per ridge
+            j = int(np.argmin(cc))
+            if j > 0:
+                theta[c] += steps[j - 1, c].reshape(NA, NF)
+            picks.append({"sea_state": keys[c], "cost_current": float(cc[0]), "cost_after": float(cc[j]),
+                          "ridge": ridges[j - 1] if j else None,
+                          "step_norm": float(np.linalg.norm(steps[j - 1, c])) if j else 0.0})
+        ratio_h = float(np.nanmean(sh[1]) / np.nanmean(sh[0]))
+        ratio_p = float(np.nanmean(sp[1]) / np.nanmean(sp[0]))
+        last = time.perf_counter() - t0
+        curve.append({"iteration": it, "heave_ratio": ratio_h, "pitch_ratio": ratio_p, "hits": float(hits[1].sum()),
+                      "hits_skyhook": float(hits[0].sum()), "seconds": last, "picks": picks,
+                      "failures": int((~np.isfinite(sh)).sum())})
+        if progress:
+            log(f"[gn_comp] it {it:2d} ({last:4.0f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): Θ before this "
+                f"step vs skyhook on {n_ep} fresh episodes: heave {100 * (ratio_h - 1):+6.2f} %, pitch "
+                f"{100 * (ratio_p - 1):+5.1f} %, hits {hits[1].sum():g} (skyhook {hits[0].sum():g}); cost per sea "
+                "state " + ", ".join(f"{p['cost_current']:+.3f} -> {p['cost_after']:+.3f}"
+                                     + (f" (ridge {p['ridge']:g})" if p["ridge"] is not None else " (no step)")
+                                     for p in picks))
+        it += 1
+    steps_per_episode = int(venv_j.envs[0].max_steps)
+    venv_j.close()
+    venv_l.close()
+    wall = time.perf_counter() - t_start
+    meta = {"algo": arc.ALGO, "method": "gauss-newton", "env_id": arc.ENV_ID, "env_kwargs": {},
+            "seed": int(seed), "iterations": it - first, "first_iteration": first, "stop_guard": guard,
+            "num_timesteps": (it - first) * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
+            "init_num_timesteps": int(init.meta.get("num_timesteps", 0)) if init is not None else 0,
+            "hyperparameters": {"iterations": iterations, "minutes": minutes, "replicates": R, "eps": eps,
+                                "ridges": ridges, "pitch_weight": pitch_weight, "hit_weight": hit_weight,
+                                "margin_weight": margin_weight, "margin_start": margin_start,
+                                "episode_seconds": episode_seconds, "discard": discard, "entries": idx,
+                                "init": init.name if init is not None else None},
+            "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
+                           f"+ 100000*{int(seed)}",
+            "curve": curve}
+    return arc.ARSCompensatorPolicy({k: theta[c] for c, k in enumerate(keys)}, table, scales, meta,
+                                    name=f"gn_comp_s{seed}")
+
+
+def default_export(seed: int) -> Path:
+    return Path("runs") / f"gn_CompensatorGains-v0_s{int(seed)}.npz"
+
+
+def main(argv=None) -> int:
+    """``python scripts/train_gn_compensator.py --seed 0 --init agents/trained/ars_CompensatorGains-v0_s0.npz``"""
+    import argparse
+    ap = argparse.ArgumentParser(description="Gauss-Newton policy search for the linear residual over the skyhook "
+                                             "compensator law (towenv/CompensatorGains-v0); agents/gn_compensator.py "
+                                             "explains the method.")
+    ap.add_argument("--seed", type=int, default=0, help="training seed (the training wave seeds)")
+    ap.add_argument("--iterations", type=int, default=5, help=f"1..{MAX_ITERATIONS} (default 5)")
+    ap.add_argument("--minutes", type=float, default=55.0, help="wall-clock budget (default 55)")
+    ap.add_argument("--replicates", type=int, default=1, help="wave seeds per (sea state, heading) per iteration")
+    ap.add_argument("--eps", type=float, default=0.01, help="finite-difference step of a weight")
+    ap.add_argument("--ridges", type=float, nargs="+", default=[0.01, 0.1, 1.0],
+                    help="ridge weights tried by the line search (relative to the normal matrix's mean diagonal)")
+    ap.add_argument("--pitch-weight", type=float, default=0.5, help="weight of ln(σ_pitch ratio) in the cost")
+    ap.add_argument("--hit-weight", type=float, default=arc.DEFAULT_HIT_WEIGHT, help="cost per end-stop hit")
+    ap.add_argument("--margin-weight", type=float, default=arc.DEFAULT_MARGIN_WEIGHT,
+                    help="weight of the stroke-margin term")
+    ap.add_argument("--stop-guard", type=float, default=None, help="stop guard (default: the init policy's, else 0)")
+    ap.add_argument("--init", default=None, help="start from this ARS/GN compensator policy file")
+    ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
+    a = ap.parse_args(argv)
+    if not 1 <= a.iterations <= MAX_ITERATIONS:
+        ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
+    if not 1 <= a.replicates <= 10:
+        ap.error(f"--replicates must be in 1..10 (got {a.replicates})")
+    for name in ("minutes", "eps"):
+        v = getattr(a, name)
+        if not (math.isfinite(v) and v > 0):
+            ap.error(f"--{name} must be a positive number (got {v})")
+    for name in ("pitch_weight", "hit_weight", "margin_weight"):
+        v = getattr(a, name)
+        if not (math.isfinite(v) and v >= 0):
+            ap.error(f"--{name.replace('_', '-')} must be a number >= 0 (got {v})")
+    if any(not (math.isfinite(r) and r > 0) for r in a.ridges):
+        ap.error(f"--ridges must be positive numbers (got {a.ridges})")
+    if a.stop_guard is not None and not 0.0 <= a.stop_guard <= 1.0:
+        ap.error(f"--stop-guard must be 0 (off) or in (0, 1] (got {a.stop_guard})")
+    init = None
+    if a.init:
+        try:
+            init = arc.load_policy(a.init)
+        except (OSError, ValueError, KeyError) as e:
+            ap.error(f"--init: {e}")
+    out = Path(a.export or default_export(a.seed))
+    try:
+        pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight, a.hit_weight,
+                    a.margin_weight, stop_guard=a.stop_guard, init=init)
+    except ValueError as e:
+        ap.error(str(e))
+    arc.save_policy(pol, out)
+    print(f"[gn_comp] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
+    return 0

@@ -1,0 +1,125 @@
+"""Gauss–Newton policy search for the CompensatorGains linear residual over skyhook (issue 14,
+agents/gn_compensator.py): it trains on the batched vector env from skyhook or from a policy file (keeping its
+weights and stop guard), its line search never keeps a step that loses on its own episodes, its wave seeds are
+disjoint from every other seed set, bad settings are refused with the field named, and its policy file is an ARS
+compensator file that scripts/evaluate.py names as Gauss–Newton."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+pytest.importorskip("stable_baselines3")
+
+import towenv  # noqa: E402,F401
+from agents import ars, gn  # noqa: E402
+from agents import ars_compensator as arc  # noqa: E402
+from agents import gn_compensator as gnc  # noqa: E402
+from helpers import load_script  # noqa: E402
+
+COMP = "towenv/CompensatorGains-v0"
+
+
+def _committed(seed=0):
+    import agents
+    return arc.load_policy(Path(agents.__file__).parent / "trained" / f"ars_CompensatorGains-v0_s{seed}.npz")
+
+
+@pytest.fixture(scope="module")
+def trained():
+    """One iteration from skyhook on one heading of two sea states, 62 s episodes scored after 60 s (~10 s)."""
+    return gnc.train(seed=3, iterations=1, entries=[0, 4], episode_seconds=62.0, discard=60.0, progress=False)
+
+
+def test_search_runs_on_the_batched_env_and_keeps_only_improving_steps(trained):
+    pol = trained
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["algo"] == arc.ALGO
+    assert pol.meta["iterations"] == 1 and pol.meta["first_iteration"] == 0 and pol.stop_guard == 0.0
+    rec = pol.meta["curve"][0]
+    assert rec["heave_ratio"] == pytest.approx(1.0) and rec["hits"] == rec["hits_skyhook"]   # Θ = 0 is skyhook
+    for p in rec["picks"]:          # a step is kept only if it beats the current Θ on the line-search episodes
+        assert p["cost_after"] <= p["cost_current"]
+        assert (p["ridge"] is None) == (p["step_norm"] == 0.0)
+    moved = {p["sea_state"] for p in rec["picks"] if p["ridge"] is not None}
+    assert {k for k, v in pol.theta.items() if np.any(v != 0)} == moved
+    assert all(v.shape == (arc.N_ACT, arc.N_FEATURES) and np.all(np.isfinite(v)) for v in pol.theta.values())
+    assert pol.meta["num_timesteps"] == 2 * (arc.N_ACT * arc.N_FEATURES + 1 + 5) * 620
+
+
+def test_warm_start_keeps_the_initial_policy(monkeypatch):
+    """From a committed ARS policy: its weights (for sea states without a kept step), base table and stop guard;
+    an ARS start begins at Gauss–Newton iteration 0, a Gauss–Newton start continues its count."""
+    init = _committed(0)
+    used = []
+    real = gnc.train_seed
+    monkeypatch.setattr(gnc, "train_seed", lambda b, it, sd, line_search=False: used.append(it) or real(
+        b, it, sd, line_search))
+    pol = gnc.train(seed=4, iterations=1, entries=[8], episode_seconds=62.0, discard=60.0, progress=False, init=init)
+    assert set(used) == {0} and pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
+    (k,) = pol.theta
+    pick = pol.meta["curve"][0]["picks"][0]
+    if pick["ridge"] is None:
+        assert np.array_equal(pol.theta[k], init.theta[k])
+    else:
+        assert np.linalg.norm(pol.theta[k] - init.theta[k]) == pytest.approx(pick["step_norm"])
+    used.clear()
+    again = gnc.train(seed=4, iterations=1, entries=[8], episode_seconds=62.0, discard=60.0, progress=False, init=pol)
+    assert set(used) == {1} and again.meta["first_iteration"] == 1
+    assert again.meta["hyperparameters"]["init"] == pol.name
+
+
+def test_wave_seeds_are_disjoint_from_every_reserved_set():
+    """As agents/gn.py's test, value by value: never an evaluation, tuning, validation, Hover, final,
+    clairvoyant-teacher, ARS (winch or compensator), probe or WinchPayout Gauss–Newton seed."""
+    base = [s for _, s in gym.make(COMP).unwrapped.eval_sea_states()]
+    reserved = {b + off for b in base for off in list(range(0, 500, 100)) + [500, 700, 900]
+                + list(range(20000, 20500, 100)) + [30000 + 100 * r for r in range(100)]}
+    others = ({ars._train_seed(b, it, sd) for b in base for it in range(100) for sd in range(3)}
+              | {arc._train_seed(b, it, sd) for b in base for it in range(arc.MAX_ITERATIONS) for sd in range(3)}
+              | {b + off + 100 * r for b in base for off in (75000, 76000) for r in range(8)}
+              | {gn.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+                 for it in range(gn.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)})
+    used = set()
+    for b in base:
+        mine = {gnc.train_seed(b + 10 * r, it, sd, ls) for r in range(10) for it in range(gnc.MAX_ITERATIONS)
+                for sd in range(3) for ls in (False, True)}
+        assert len(mine) == 10 * gnc.MAX_ITERATIONS * 3 * 2
+        used |= mine
+    assert not used & (reserved | others)
+    with pytest.raises(ValueError, match="iteration"):
+        gnc.train_seed(base[0], gnc.MAX_ITERATIONS, 0)
+
+
+@pytest.mark.parametrize("kw, field", [({"iterations": 0}, "iterations"), ({"eps": 0.0}, "eps"),
+                                       ({"ridges": (1.0, -1.0)}, "ridge"), ({"replicates": 11}, "replicates"),
+                                       ({"episode_seconds": 60.0}, "episode_seconds"), ({"entries": [12]}, "entries"),
+                                       ({"hit_weight": -1.0}, "hit_weight"), ({"stop_guard": 1.5}, "stop_guard")])
+def test_bad_settings_are_refused_naming_the_field(kw, field):
+    with pytest.raises(ValueError, match=field):
+        gnc.train(**kw)
+
+
+def test_command_line_refuses_bad_arguments(capsys):
+    for bad in (["--iterations", "0"], ["--eps", "-1"], ["--ridges", "0"], ["--replicates", "11"],
+                ["--margin-weight", "-2"], ["--stop-guard", "2"], ["--init", "no_such_policy.npz"]):
+        with pytest.raises(SystemExit) as ex:
+            gnc.main(bad)
+        assert ex.value.code == 2
+    assert "--init" in capsys.readouterr().err
+    assert str(gnc.default_export(1)) == "runs/gn_CompensatorGains-v0_s1.npz"
+
+
+def test_policy_file_is_a_compensator_file_that_evaluate_names(trained, tmp_path, monkeypatch):
+    f = arc.save_policy(trained, tmp_path / "gnc_test_s3.npz")
+    back = arc.load_policy(f)
+    assert back.meta["method"] == "gauss-newton"
+    assert all(np.array_equal(back.theta[k], trained.theta[k]) for k in trained.theta)
+    evaluate = load_script("evaluate")
+    monkeypatch.chdir(tmp_path)
+    assert evaluate.main([str(f), "--episodes", "0", "--baselines", "locked", "skyhook", "--no-plots",
+                          "--env-kwargs", "episode_seconds:30", "--discard", "10"]) == 0
+    text = (tmp_path / "runs" / "reports" / "gnc_test_s3" / "report.md").read_text()
+    assert "Gauss-Newton policy search (the ARS compensator policy class)" in text
+    assert "1 Gauss-Newton iterations" in text
