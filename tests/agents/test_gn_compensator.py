@@ -5,6 +5,7 @@ disjoint from every other seed set, bad settings are refused with the field name
 compensator file that scripts/evaluate.py names as Gauss–Newton."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -123,3 +124,24 @@ def test_policy_file_is_a_compensator_file_that_evaluate_names(trained, tmp_path
     text = (tmp_path / "runs" / "reports" / "gnc_test_s3" / "report.md").read_text()
     assert "Gauss-Newton policy search (the ARS compensator policy class)" in text
     assert "1 Gauss-Newton iterations" in text
+
+
+def test_semiactive_clairvoyant_probe_never_keeps_a_worse_plan(capsys):
+    """scripts/probe_semiactive_clairvoyant.py on a short episode: the plan starts as skyhook (0 % at the start),
+    keeps a candidate only if its cost beats the current plan's on the same (deterministic) episode, so the final
+    plan is never worse than skyhook in that cost; bad arguments exit 2."""
+    import re
+    probe = load_script("probe_semiactive_clairvoyant")
+    assert probe.main(["--entries", "4", "--episode-seconds", "100", "--block", "2", "--iterations", "2"]) == 0
+    out = capsys.readouterr().out
+    assert len(re.findall(r"entry 4 it \d: σ_h", out)) == 2
+    final = re.search(r"skyhook ([0-9.]+) m \((\d+) hits\), clairvoyant semi-active ([0-9.]+) m \((\d+) hits\): "
+                      r"(-?[0-9.]+) % below skyhook", out)
+    sky, sky_hits, plan, plan_hits, red = (float(x) for x in final.groups())
+    # cost = ln σ + 0.3·hits + margin: the kept plan is not worse than skyhook in it
+    assert math.log(plan) + 0.3 * plan_hits <= math.log(sky) + 0.3 * sky_hits + 0.01
+    assert red == pytest.approx(100 * (1 - plan / sky), abs=0.11)
+    for bad in (["--iterations", "0"], ["--ridges", "-1"], ["--entries", "12"], ["--episode-seconds", "65"]):
+        with pytest.raises(SystemExit) as ex:
+            probe.main(bad)
+        assert ex.value.code == 2
