@@ -68,6 +68,44 @@ def initial_theta(init, keys, feature_set: str) -> np.ndarray:
     return theta
 
 
+def check_settings(iterations, eps, ridges, replicates, episode_seconds, discard, max_iterations=MAX_ITERATIONS):
+    """ValueError naming the field for a search setting out of range (shared by the winch and compensator
+    searches)."""
+    if not 1 <= int(iterations) <= max_iterations:
+        raise ValueError(f"iterations must be in 1..{max_iterations} (got {iterations})")
+    if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
+        raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
+    if not 1 <= int(replicates) <= 10:
+        raise ValueError(f"replicates must be in 1..10 (got {replicates}; 10·replicate stays below the next seed block)")
+    if not episode_seconds > discard + 1.0:
+        raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
+
+
+def first_iteration(init, iterations, max_iterations=MAX_ITERATIONS) -> int:
+    """The iteration a search starts at: a Gauss–Newton ``init``'s count continued (its wave seeds stay fresh), else
+    0; ValueError if ``iterations`` more would leave the seed blocks."""
+    gn_init = init is not None and init.meta.get("method") == "gauss-newton"
+    first = int(init.meta.get("iterations", 0) + init.meta.get("first_iteration", 0)) if gn_init else 0
+    if first + int(iterations) > max_iterations:
+        raise ValueError(f"iterations: the initial policy has {first} iterations; {first} + {iterations} exceeds "
+                         f"{max_iterations} (the seed blocks)")
+    return first
+
+
+def training_entries(env_id, table, entries):
+    """(evaluation list, indices trained on, sorted sea-state keys of ``table`` they map to); ValueError naming
+    ``entries`` for indices outside the list (or none)."""
+    import gymnasium as gym
+    __import__("towenv")                    # registers the ids
+    env = gym.make(env_id)
+    ev = env.unwrapped.eval_sea_states()
+    env.close()
+    idx = list(range(len(ev))) if entries is None else [int(i) for i in entries]
+    if not idx or any(not 0 <= i < len(ev) for i in idx):
+        raise ValueError(f"entries must be indices in 0..{len(ev) - 1} of the evaluation list (got {entries})")
+    return ev, idx, sorted({nearest_key(table, ev[i][0]) for i in idx})
+
+
 def gauss_newton_steps(terms, code, ok, n_codes: int, ridges) -> np.ndarray:
     """Ridge-regularised Gauss–Newton steps per sea state (module docstring, step 2): for every sea state c,
     Δθ(λ) = −(A + λ·tr(A)/NF·I)⁻¹ b with A = Σ_terms Σ_e w_e J_eᵀJ_e, b = Σ_terms Σ_e w_e J_eᵀ r_e over the episodes e
@@ -106,34 +144,16 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     have start at 0; its along-cable table is kept; the iterations continue its count, so the wave seeds are fresh).
     Stops after ``iterations`` more or when the next iteration would pass ``minutes`` of wall time. ``entries``:
     indices into the evaluation (sea state, heading) list to train on (default all 12)."""
-    import gymnasium as gym
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import WinchPayoutVectorEnv
     from .baselines import load_tuned
-    if not 1 <= int(iterations) <= MAX_ITERATIONS:
-        raise ValueError(f"iterations must be in 1..{MAX_ITERATIONS} (got {iterations})")
-    if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
-        raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
-    if not 1 <= int(replicates) <= 10:
-        raise ValueError(f"replicates must be in 1..10 (got {replicates}; 10·replicate stays below the next seed block)")
-    if not episode_seconds > discard + 1.0:
-        raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
+    check_settings(iterations, eps, ridges, replicates, episode_seconds, discard)
     t_start = time.perf_counter()
-    gn_init = init is not None and init.meta.get("method") == "gauss-newton"
-    first = int(init.meta.get("iterations", 0) + init.meta.get("first_iteration", 0)) if gn_init else 0
-    if first + int(iterations) > MAX_ITERATIONS:
-        raise ValueError(f"iterations: the initial policy has {first} iterations; {first} + {iterations} exceeds "
-                         f"{MAX_ITERATIONS} (the seed blocks)")
+    first = first_iteration(init, iterations)
     table = dict(init.base_table) if init is not None else dict(load_tuned().get("along_cable") or {})
     if not table:
         raise RuntimeError("no tuned along_cable table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
-    env = gym.make(ars.ENV_ID)
-    ev = env.unwrapped.eval_sea_states()
-    env.close()
-    idx = list(range(len(ev))) if entries is None else [int(i) for i in entries]
-    if not idx or any(not 0 <= i < len(ev) for i in idx):
-        raise ValueError(f"entries must be indices in 0..{len(ev) - 1} of the evaluation list (got {entries})")
-    keys = sorted({nearest_key(table, ev[i][0]) for i in idx})
+    ev, idx, keys = training_entries(ars.ENV_ID, table, entries)
     C, NF, R = len(keys), ars.n_features(feature_set), int(replicates)
     ridges = [float(r) for r in ridges]
     n_ep = len(idx) * R

@@ -36,7 +36,7 @@ import numpy as np
 
 from . import ars_compensator as arc
 from .common import nearest_key
-from .gn import gauss_newton_steps
+from .gn import check_settings, first_iteration, gauss_newton_steps, training_entries
 
 __all__ = ["train", "train_seed", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
 
@@ -73,18 +73,10 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     (continuing a Gauss–Newton ``init``'s count, so its wave seeds stay fresh) or when the next iteration would pass
     ``minutes`` of wall time. ``stop_guard``: None = the init's (0 without init). ``entries``: indices into the
     evaluation (sea state, heading) list to train on (default all 12)."""
-    import gymnasium as gym
     __import__("towenv")
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from .baselines import load_tuned
-    if not 1 <= int(iterations) <= MAX_ITERATIONS:
-        raise ValueError(f"iterations must be in 1..{MAX_ITERATIONS} (got {iterations})")
-    if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
-        raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
-    if not 1 <= int(replicates) <= 10:
-        raise ValueError(f"replicates must be in 1..10 (got {replicates}; 10·replicate stays below the next seed block)")
-    if not episode_seconds > discard + 1.0:
-        raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
+    check_settings(iterations, eps, ridges, replicates, episode_seconds, discard, MAX_ITERATIONS)
     for name, v in (("pitch_weight", pitch_weight), ("hit_weight", hit_weight), ("margin_weight", margin_weight)):
         if not (math.isfinite(v) and v >= 0):
             raise ValueError(f"{name} must be a finite number >= 0 (got {v})")
@@ -92,21 +84,11 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     if not 0.0 <= guard <= 1.0:
         raise ValueError(f"stop_guard must be 0 (off) or in (0, 1] (got {guard})")
     t_start = time.perf_counter()
-    gn_init = init is not None and init.meta.get("method") == "gauss-newton"
-    first = int(init.meta.get("iterations", 0) + init.meta.get("first_iteration", 0)) if gn_init else 0
-    if first + int(iterations) > MAX_ITERATIONS:
-        raise ValueError(f"iterations: the initial policy has {first} iterations; {first} + {iterations} exceeds "
-                         f"{MAX_ITERATIONS} (the seed blocks)")
+    first = first_iteration(init, iterations, MAX_ITERATIONS)
     table = dict(init.base_table) if init is not None else dict(load_tuned().get("skyhook") or {})
     if not table:
         raise RuntimeError("no tuned skyhook table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
-    env = gym.make(arc.ENV_ID)
-    ev = env.unwrapped.eval_sea_states()
-    env.close()
-    idx = list(range(len(ev))) if entries is None else [int(i) for i in entries]
-    if not idx or any(not 0 <= i < len(ev) for i in idx):
-        raise ValueError(f"entries must be indices in 0..{len(ev) - 1} of the evaluation list (got {entries})")
-    keys = sorted({nearest_key(table, ev[i][0]) for i in idx})
+    ev, idx, keys = training_entries(arc.ENV_ID, table, entries)
     C, NA, NF, R = len(keys), arc.N_ACT, arc.N_FEATURES, int(replicates)
     NW = NA * NF
     theta = np.zeros((C, NA, NF))
