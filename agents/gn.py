@@ -22,8 +22,8 @@ The result is an :class:`agents.ars.ARSPolicy` (same features, same file format,
 
 Wave seeds: Jacobian episodes ``1000·code + j + 10·replicate + 80000 + 200·iteration + 100000·seed``, line-search
 episodes the same + 100; iteration < :data:`MAX_ITERATIONS`, replicate < 10 — never an evaluation (+0…400), tuning (+500), validation (+700), Hover
-design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training (+40000…, +50000…) or probe (+75000,
-+76000) seed.
+design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training (+40000…, +50000…), probe (+75000,
++76000) or semi-active teacher-plan (+92000…) seed.
 """
 from __future__ import annotations
 

@@ -24,7 +24,7 @@ or from a policy file (``init``: its Θ, base table and stop guard are kept).
 Wave seeds: Jacobian episodes ``1000·code + j + 10·replicate + 62000 + 200·iteration + 100000·seed``, line-search
 episodes the same + 100; iteration < :data:`MAX_ITERATIONS`, replicate < 10 — never an evaluation (+0…400), tuning
 (+500), validation (+700), Hover design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training
-(+40000…, +50000…), probe (+75000, +76000) or WinchPayout Gauss–Newton (+80000…) seed.
+(+40000…, +50000…), probe (+75000, +76000), WinchPayout Gauss–Newton (+80000…) or semi-active teacher-plan (+92000…) seed.
 """
 from __future__ import annotations
 

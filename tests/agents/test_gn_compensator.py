@@ -145,3 +145,64 @@ def test_semiactive_clairvoyant_probe_never_keeps_a_worse_plan(capsys):
         with pytest.raises(SystemExit) as ex:
             probe.main(bad)
         assert ex.value.code == 2
+
+
+def test_teacher_seeds_are_disjoint_from_every_other_set():
+    """The clairvoyant teacher plans' wave seeds (+92000 + 10·replicate) are never an evaluation, final, tuning,
+    validation, ARS, probe or Gauss–Newton (winch or compensator) seed, value by value; replicate 10 is refused."""
+    probe = load_script("probe_semiactive_clairvoyant")
+    base = [s for _, s in gym.make(COMP).unwrapped.eval_sea_states()]
+    reserved = {b + off for b in base for off in list(range(0, 500, 100)) + [500, 700, 900]
+                + list(range(20000, 20500, 100)) + [30000 + 100 * r for r in range(100)]}
+    others = ({ars._train_seed(b, it, sd) for b in base for it in range(100) for sd in range(3)}
+              | {arc._train_seed(b, it, sd) for b in base for it in range(arc.MAX_ITERATIONS) for sd in range(3)}
+              | {b + off + 100 * r for b in base for off in (75000, 76000) for r in range(8)}
+              | {gn.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+                 for it in range(gn.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)}
+              | {gnc.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+                 for it in range(gnc.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)})
+    mine = {probe.teacher_seed(b, r) for b in base for r in range(probe.MAX_REPLICATES)}
+    assert len(mine) == len(base) * probe.MAX_REPLICATES
+    assert not mine & (reserved | others)
+    with pytest.raises(ValueError, match="replicate"):
+        probe.teacher_seed(base[0], probe.MAX_REPLICATES)
+
+
+def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_path, capsys):
+    """Two short teacher plans saved by the clairvoyant probe replay to the same σ bit for bit (the replay is the
+    plan), the imitation fit explains more of the plans' corrections on its own data with less ridge, and the
+    written policy is an ARS compensator policy file with the picked ridge."""
+    import re
+    probe = load_script("probe_semiactive_clairvoyant")
+    imit = load_script("probe_semiactive_imitation")
+    for e in ("4", "5"):
+        assert probe.main(["--entries", e, "--episode-seconds", "80", "--block", "2", "--iterations", "1",
+                           "--seed-set", "teacher", "--replicate", "9", "--save-plans", str(tmp_path)]) == 0
+    files = sorted(tmp_path.glob("plan_*.npz"))
+    assert [f.name for f in files] == ["plan_96090.npz", "plan_96091.npz"]
+    plan = probe.load_plan(files[0])
+    assert plan["U"].shape == (15, 2) and plan["block"] == 20 and plan["sea"].hs == pytest.approx(1.88)
+    capsys.readouterr()
+    out_file = tmp_path / "imitation.npz"
+    assert imit.main(["--plans", str(tmp_path), "--entries", "4", "--ridges", "0.01", "1",
+                      "--out", str(out_file)]) == 0
+    out = capsys.readouterr().out
+    assert "reproduces the plans' σ to 0.0e+00" in out
+    fit = [float(x) for x in re.findall(r"λ [0-9.]+: R² (-?[0-9.]+)", out)]
+    assert len(fit) == 2 and fit[0] >= fit[1] > 0.0
+    pol = arc.load_policy(out_file)
+    assert pol.meta["trainer"] == "probe_semiactive_imitation" and pol.meta["ridge"] in (0.01, 1.0)
+    assert set(pol.theta) == {"hs1.88_tp5.90"}
+    # a plan on top of the imitation policy stores its residual and replays to the same σ as well
+    assert probe.main(["--entries", "6", "--episode-seconds", "80", "--block", "2", "--iterations", "1",
+                       "--seed-set", "teacher", "--replicate", "8", "--save-plans", str(tmp_path),
+                       "--base-policy", str(out_file)]) == 0
+    assert "below base policy" in capsys.readouterr().out
+    np.testing.assert_array_equal(probe.load_plan(tmp_path / "plan_96082.npz")["theta_base"],
+                                  pol.theta["hs1.88_tp5.90"])
+    assert imit.main(["--plans", str(tmp_path), "--entries", "4", "--ridges", "1"]) == 0
+    assert "reproduces the plans' σ to 0.0e+00" in capsys.readouterr().out
+    for bad in (["--plans", str(tmp_path / "none")], ["--ridges", "0"]):
+        with pytest.raises(SystemExit) as ex:
+            imit.main(bad)
+        assert ex.value.code == 2
