@@ -65,12 +65,14 @@ def save_plan(path, U, sea, seed, k0, block, discard, sky, plan, theta_base=None
 def load_plan(path):
     import json
 
+    from agents.ars_compensator import N_ACT, N_FEATURES
     from towenv.sea import SeaState
     with np.load(path) as z:
         d = {k: z[k] for k in z.files}
     return dict(U=d["U"], k0=int(d["k0"]), block=int(d["block"]), discard=float(d["discard"]), seed=int(d["seed"]),
                 sea=SeaState(**json.loads(str(d["sea"]))), sigma_skyhook=float(d["sigma_skyhook"]),
-                sigma_plan=float(d["sigma_plan"]), theta_base=d["theta_base"])
+                sigma_plan=float(d["sigma_plan"]),
+                theta_base=d.get("theta_base", np.zeros((N_ACT, N_FEATURES))))   # files without it: skyhook base
 
 
 def run_plan(venv, batch, sea, seed, U, k0, block, margin_start, theta=None):
