@@ -176,7 +176,7 @@ def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_
     probe = load_script("probe_semiactive_clairvoyant")
     imit = load_script("probe_semiactive_imitation")
     for e in ("4", "5"):
-        assert probe.main(["--entries", e, "--episode-seconds", "80", "--block", "2", "--iterations", "1",
+        assert probe.main(["--entries", e, "--episode-seconds", "40", "--discard", "20", "--block", "2", "--iterations", "1",
                            "--seed-set", "teacher", "--replicate", "9", "--save-plans", str(tmp_path)]) == 0
     files = sorted(tmp_path.glob("plan_*.npz"))
     assert [f.name for f in files] == ["plan_96090.npz", "plan_96091.npz"]
@@ -194,7 +194,7 @@ def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_
     assert pol.meta["trainer"] == "probe_semiactive_imitation" and pol.meta["ridge"] in (0.01, 1.0)
     assert set(pol.theta) == {"hs1.88_tp5.90"}
     # a plan on top of the imitation policy stores its residual and replays to the same σ as well
-    assert probe.main(["--entries", "6", "--episode-seconds", "80", "--block", "2", "--iterations", "1",
+    assert probe.main(["--entries", "6", "--episode-seconds", "40", "--discard", "20", "--block", "2", "--iterations", "1",
                        "--seed-set", "teacher", "--replicate", "8", "--save-plans", str(tmp_path),
                        "--base-policy", str(out_file)]) == 0
     assert "below base policy" in capsys.readouterr().out
