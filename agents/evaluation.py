@@ -247,6 +247,10 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
                      f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
                      f"seed {meta.get('seed', '?')})")
+        elif meta.get("algo") == "ars_skyhook" and meta.get("trainer") == "probe_semiactive_imitation":
+            desc = ("imitation of clairvoyant semi-active teacher plans (the ARS compensator policy class, ridge "
+                    f"{meta.get('ridge', '?')}, {len(meta.get('plans') or [])} plans; "
+                    "scripts/probe_semiactive_imitation.py)")
         elif meta.get("algo") == "ars_skyhook":
             desc = ("Gauss-Newton policy search (the ARS compensator policy class)" if gn else "ARS policy") + (
                     ", linear residual on `skyhook` over the tow-point heave history and stroke features "

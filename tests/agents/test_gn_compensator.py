@@ -168,7 +168,7 @@ def test_teacher_seeds_are_disjoint_from_every_other_set():
         probe.teacher_seed(base[0], probe.MAX_REPLICATES)
 
 
-def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_path, capsys):
+def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_path, capsys, monkeypatch):
     """Two short teacher plans saved by the clairvoyant probe replay to the same σ bit for bit (the replay is the
     plan), the imitation fit explains more of the plans' corrections on its own data with less ridge, and the
     written policy is an ARS compensator policy file with the picked ridge."""
@@ -193,6 +193,14 @@ def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_
     pol = arc.load_policy(out_file)
     assert pol.meta["trainer"] == "probe_semiactive_imitation" and pol.meta["ridge"] in (0.01, 1.0)
     assert set(pol.theta) == {"hs1.88_tp5.90"}
+    evaluate = load_script("evaluate")
+    monkeypatch.chdir(tmp_path)
+    assert evaluate.main([str(out_file), "--episodes", "0", "--baselines", "locked", "--no-plots",
+                          "--env-kwargs", "episode_seconds:30", "--discard", "10"]) == 0
+    text = (tmp_path / "runs" / "reports" / "imitation" / "report.md").read_text()
+    assert "imitation of clairvoyant semi-active teacher plans (the ARS compensator policy class" in text
+    assert "2 plans" in text
+    capsys.readouterr()
     # a plan on top of the imitation policy stores its residual and replays to the same σ as well
     assert probe.main(["--entries", "6", "--episode-seconds", "40", "--discard", "20", "--block", "2", "--iterations", "1",
                        "--seed-set", "teacher", "--replicate", "8", "--save-plans", str(tmp_path),
