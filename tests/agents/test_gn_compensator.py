@@ -71,9 +71,9 @@ def test_warm_start_keeps_the_initial_policy(monkeypatch):
     assert again.meta["hyperparameters"]["init"] == pol.name
 
 
-def test_wave_seeds_are_disjoint_from_every_reserved_set():
-    """As agents/gn.py's test, value by value: never an evaluation, tuning, validation, Hover, final,
-    clairvoyant-teacher, ARS (winch or compensator), probe or WinchPayout Gauss–Newton seed."""
+def _seed_sets():
+    """(evaluation base seeds, the reserved evaluation/tuning/validation/Hover/final/teacher seeds, the ARS
+    (winch, compensator), probe and WinchPayout Gauss–Newton training seeds), value by value."""
     base = [s for _, s in gym.make(COMP).unwrapped.eval_sea_states()]
     reserved = {b + off for b in base for off in list(range(0, 500, 100)) + [500, 700, 900]
                 + list(range(20000, 20500, 100)) + [30000 + 100 * r for r in range(100)]}
@@ -82,6 +82,13 @@ def test_wave_seeds_are_disjoint_from_every_reserved_set():
               | {b + off + 100 * r for b in base for off in (75000, 76000) for r in range(8)}
               | {gn.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
                  for it in range(gn.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)})
+    return base, reserved, others
+
+
+def test_wave_seeds_are_disjoint_from_every_reserved_set():
+    """As agents/gn.py's test, value by value: never an evaluation, tuning, validation, Hover, final,
+    clairvoyant-teacher, ARS (winch or compensator), probe or WinchPayout Gauss–Newton seed."""
+    base, reserved, others = _seed_sets()
     used = set()
     for b in base:
         mine = {gnc.train_seed(b + 10 * r, it, sd, ls) for r in range(10) for it in range(gnc.MAX_ITERATIONS)
@@ -151,16 +158,9 @@ def test_teacher_seeds_are_disjoint_from_every_other_set():
     """The clairvoyant teacher plans' wave seeds (+92000 + 10·replicate) are never an evaluation, final, tuning,
     validation, ARS, probe or Gauss–Newton (winch or compensator) seed, value by value; replicate 10 is refused."""
     probe = load_script("probe_semiactive_clairvoyant")
-    base = [s for _, s in gym.make(COMP).unwrapped.eval_sea_states()]
-    reserved = {b + off for b in base for off in list(range(0, 500, 100)) + [500, 700, 900]
-                + list(range(20000, 20500, 100)) + [30000 + 100 * r for r in range(100)]}
-    others = ({ars._train_seed(b, it, sd) for b in base for it in range(100) for sd in range(3)}
-              | {arc._train_seed(b, it, sd) for b in base for it in range(arc.MAX_ITERATIONS) for sd in range(3)}
-              | {b + off + 100 * r for b in base for off in (75000, 76000) for r in range(8)}
-              | {gn.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
-                 for it in range(gn.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)}
-              | {gnc.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
-                 for it in range(gnc.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)})
+    base, reserved, others = _seed_sets()
+    others |= {gnc.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+               for it in range(gnc.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)}
     mine = {probe.teacher_seed(b, r) for b in base for r in range(probe.MAX_REPLICATES)}
     assert len(mine) == len(base) * probe.MAX_REPLICATES
     assert not mine & (reserved | others)
