@@ -214,3 +214,41 @@ def test_imitation_probe_replays_saved_plans_and_writes_an_evaluable_policy(tmp_
         with pytest.raises(SystemExit) as ex:
             imit.main(bad)
         assert ex.value.code == 2
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_committed_gauss_newton_policies_ship_load_and_act(seed):
+    """The three committed Gauss–Newton compensator policies (docs/agents.md) are package data of the installed
+    ``agents``, carry their recipe (6 iterations, 2 replicates, ridges 0.01…100, from ARS seed 0, its stop guard
+    0.9), differ from their ARS start in every sea state (the line search kept steps everywhere) and act inside the
+    action box, not as the ARS policy does."""
+    import agents
+    from agents.baselines import load_tuned
+    pol = arc.load_policy(Path(agents.__file__).parent / "trained" / f"gn_CompensatorGains-v0_s{seed}.npz")
+    hp = pol.meta["hyperparameters"]
+    assert pol.meta["method"] == "gauss-newton" and (pol.meta["seed"], pol.meta["iterations"]) == (seed, 6)
+    assert (hp["replicates"], hp["ridges"], hp["init"]) == (2, [0.01, 0.1, 1.0, 10.0, 100.0],
+                                                            "ars_CompensatorGains-v0_s0")
+    init = _committed(0)
+    assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
+    assert set(pol.theta) == set(load_tuned()["skyhook"])
+    assert all(np.abs(pol.theta[k] - init.theta[k]).max() > 1e-3 for k in pol.theta)
+    env = gym.make(COMP, episode_seconds=20.0)
+    try:
+        acts = {}
+        for name, p in (("gn", pol), ("ars", init)):
+            p.bind_env(env)
+            sea, s = env.unwrapped.eval_sea_states()[9]
+            obs, _ = env.reset(seed=s + 123456, options={"sea_state": sea, "sea_seed": s + 123456})
+            out = []
+            for k in range(env.unwrapped.max_steps):
+                a, _ = p.predict(obs, episode_start=np.array([k == 0]))
+                out.append(np.array(a, float))
+                obs, _r, term, trunc, _i = env.step(a)
+                if term or trunc:
+                    break
+            acts[name] = np.array(out)
+    finally:
+        env.close()
+    assert np.all(np.isfinite(acts["gn"])) and np.all(np.abs(acts["gn"]) <= 1.0)
+    assert acts["gn"].shape == acts["ars"].shape and not np.allclose(acts["gn"], acts["ars"], atol=1e-3)
