@@ -233,22 +233,17 @@ def test_committed_gauss_newton_policies_ship_load_and_act(seed):
     assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
     assert set(pol.theta) == set(load_tuned()["skyhook"])
     assert all(np.abs(pol.theta[k] - init.theta[k]).max() > 1e-3 for k in pol.theta)
+    from agents.metrics import rollout
     env = gym.make(COMP, episode_seconds=20.0)
     try:
-        acts = {}
-        for name, p in (("gn", pol), ("ars", init)):
-            p.bind_env(env)
-            sea, s = env.unwrapped.eval_sea_states()[9]
-            obs, _ = env.reset(seed=s + 123456, options={"sea_state": sea, "sea_seed": s + 123456})
-            out = []
-            for k in range(env.unwrapped.max_steps):
-                a, _ = p.predict(obs, episode_start=np.array([k == 0]))
-                out.append(np.array(a, float))
-                obs, _r, term, trunc, _i = env.step(a)
-                if term or trunc:
-                    break
-            acts[name] = np.array(out)
+        sea, s = env.unwrapped.eval_sea_states()[9]
+        rec = {name: rollout(env, p.bind_env(env), sea, s + 123456) for name, p in (("gn", pol), ("ars", init))}
+        k_lo, k_hi = env.unwrapped.stiffness_range[:2]
+        b_lo, b_hi = env.unwrapped.damping_range[:2]
     finally:
         env.close()
-    assert np.all(np.isfinite(acts["gn"])) and np.all(np.abs(acts["gn"]) <= 1.0)
-    assert acts["gn"].shape == acts["ars"].shape and not np.allclose(acts["gn"], acts["ars"], atol=1e-3)
+    k, b = rec["gn"].data["stiffness"], rec["gn"].data["damping"]
+    assert np.all(np.isfinite(k)) and np.all(np.isfinite(b)) and len(k) == len(rec["ars"].data["stiffness"])
+    assert np.all((k >= k_lo * (1 - 1e-9)) & (k <= k_hi * (1 + 1e-9)))       # inside the action box's map
+    assert np.all((b >= b_lo * (1 - 1e-9)) & (b <= b_hi * (1 + 1e-9)))
+    assert not (np.allclose(k, rec["ars"].data["stiffness"]) and np.allclose(b, rec["ars"].data["damping"]))
