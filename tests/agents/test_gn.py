@@ -122,18 +122,27 @@ def test_command_line_refuses_out_of_range_arguments(capsys):
     assert str(gn.default_export(1, "v3")) == "runs/gn3_WinchPayout-v0_s1.npz"
 
 
+@pytest.mark.parametrize("family", ["gn", "gn2"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_committed_policies_ship_load_and_act(seed):
-    """The three committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed
-    ``agents``, load with their recipe (10 iterations, feature set v2, the along-cable table's sea states) and act:
-    inside the action box and not the along-cable law itself."""
+def test_committed_policies_ship_load_and_act(seed, family):
+    """The committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed ``agents``,
+    load with their recipe (``gn``: 10 iterations; ``gn2``: 6 more, two replicates, ridges 0.01-100, continued
+    from the ``gn`` file of the same seed; feature set v2, the along-cable table's sea states) and act: inside the
+    action box and not the along-cable law itself."""
     from pathlib import Path
 
     import agents
     from agents.baselines import load_tuned, make_baseline
     from agents.metrics import rollout
-    pol = ars.load_ars_policy(Path(agents.__file__).parent / "trained" / f"gn_WinchPayout-v0_s{seed}.npz")
-    assert pol.meta["method"] == "gauss-newton" and (pol.meta["seed"], pol.meta["iterations"]) == (seed, 10)
+    pol = ars.load_ars_policy(Path(agents.__file__).parent / "trained" / f"{family}_WinchPayout-v0_s{seed}.npz")
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed
+    if family == "gn":
+        assert pol.meta["iterations"] == 10
+    else:
+        hp = pol.meta["hyperparameters"]
+        assert (pol.meta["first_iteration"], pol.meta["iterations"]) == (10, 6)
+        assert hp["init"] == f"gn_WinchPayout-v0_s{seed}" and hp["replicates"] == 2
+        assert hp["ridges"] == [0.01, 0.1, 1.0, 10.0, 100.0]
     assert pol.feature_set == "v2" and set(pol.theta) == set(load_tuned()["along_cable"])
     env = gym.make(WINCH, episode_seconds=20.0)
     pol.bind_env(env)
