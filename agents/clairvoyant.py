@@ -198,6 +198,7 @@ class PlanResult:
     sigma: float              # simulated σ(fish heave) over the scored window, m
     history: list             # σ per iteration
     seconds: float
+    free_sigma: float = math.nan   # σ with no control on the same episode (NaN for plans read from the cache)
 
 
 def plan_episode(env, sea, seed, kind: str, h, iterations: int = 8, discard: float | None = None,
@@ -258,7 +259,7 @@ def plan_episode(env, sea, seed, kind: str, h, iterations: int = 8, discard: flo
             rho *= 10.0                                    # trust the linear model less
             if rho > 1.0:
                 break
-    return PlanResult(_to_fine(best[1], D, n), best[0], hist, time.time() - t0)
+    return PlanResult(_to_fine(best[1], D, n), best[0], hist, time.time() - t0, free_sig)
 
 
 # ============================================================================ baselines

@@ -230,6 +230,9 @@ def test_clairvoyant_sees_the_future_and_beats_the_causal_law(tmp_path, monkeypa
     m_ac = episode_metrics(rollout(env, make_baseline("along_cable", env), sea, seed), discard=50.0)
     m_fx = episode_metrics(rollout(env, make_baseline("fixed_winch", env), sea, seed), discard=50.0)
     assert m_cv["rms_heave"] < m_ac["rms_heave"] < m_fx["rms_heave"]
+    # the planner's own no-control run is the fixed winch's episode; learning only keeps improvements
+    assert cv.last.free_sigma == pytest.approx(m_fx["rms_heave"], rel=1e-9)
+    assert cv.last.sigma == min(cv.last.history)
     plan_a = cv.plan.copy()
     env.reset(seed=seed + 1, options={"sea_state": sea, "sea_seed": seed + 1})
     cv.predict(np.zeros(env.observation_space.shape, np.float32), episode_start=np.array([True]))
