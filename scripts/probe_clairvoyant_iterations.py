@@ -15,7 +15,7 @@ import argparse
 import sys
 
 
-def main(argv=None) -> int:
+def main(argv=None) -> list:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("entries", nargs="*", type=int, default=[0, 1, 4, 5, 8, 9],
                     help="evaluation-set entry indices (0..11; default: 0 1 4 5 8 9, headings 180° and 160° of codes 3-5)")
@@ -23,6 +23,8 @@ def main(argv=None) -> int:
     ap.add_argument("--episode-seconds", type=float, default=None, help="episode length (default: the environment's)")
     ap.add_argument("--verbose", action="store_true", help="print every line-search step")
     a = ap.parse_args(argv)
+    if not 1 <= a.iterations <= 30:
+        ap.error(f"--iterations must be in 1..30; got {a.iterations}")
     if a.episode_seconds is not None and not 100.0 <= a.episode_seconds <= 3600.0:
         ap.error(f"--episode-seconds must be in 100..3600 (the score starts at 60 s or half the episode; got {a.episode_seconds})")
     import gymnasium as gym
@@ -39,8 +41,6 @@ def main(argv=None) -> int:
     bad = [e for e in a.entries if not 0 <= e < len(ev)]
     if bad:
         ap.error(f"entries must be in 0..{len(ev) - 1}; got {bad}")
-    if not 1 <= a.iterations <= 30:
-        ap.error(f"--iterations must be in 1..30; got {a.iterations}")
     planner = gym.make("towenv/WinchPayout-v0", **kw).unwrapped
     h, _ = identify_fir(planner, "winch", 60.0)
     along = make_baseline("along_cable", env, load_tuned())
