@@ -212,6 +212,7 @@ def test_causal_baseline_acts_on_its_observations_only():
     np.testing.assert_array_equal(np.array(A), np.array(A2))
 
 
+@pytest.mark.slow
 def test_clairvoyant_sees_the_future_and_beats_the_causal_law(tmp_path, monkeypatch):
     """The clairvoyant winch's plan depends on the episode's future: two episodes with the same sea state but
     different wave seeds get different plans even when fed identical observations; replayed on the environment
