@@ -233,20 +233,26 @@ def test_committed_gauss_newton_policies_ship_load_and_act(seed):
     assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
     assert set(pol.theta) == set(load_tuned()["skyhook"])
     assert all(np.abs(pol.theta[k] - init.theta[k]).max() > 1e-3 for k in pol.theta)
+    _assert_acts_in_box_and_unlike(pol, init)
+
+
+def _assert_acts_in_box_and_unlike(pol, other):
+    """``pol`` run on a 20 s code-5 episode gives finite gains inside the action box's map, and not those of
+    ``other`` on the same episode."""
     from agents.metrics import rollout
     env = gym.make(COMP, episode_seconds=20.0)
     try:
         sea, s = env.unwrapped.eval_sea_states()[9]
-        rec = {name: rollout(env, p.bind_env(env), sea, s + 123456) for name, p in (("gn", pol), ("ars", init))}
+        rec = [rollout(env, p.bind_env(env), sea, s + 123456) for p in (pol, other)]
         k_lo, k_hi = env.unwrapped.stiffness_range[:2]
         b_lo, b_hi = env.unwrapped.damping_range[:2]
     finally:
         env.close()
-    k, b = rec["gn"].data["stiffness"], rec["gn"].data["damping"]
-    assert np.all(np.isfinite(k)) and np.all(np.isfinite(b)) and len(k) == len(rec["ars"].data["stiffness"])
+    k, b = rec[0].data["stiffness"], rec[0].data["damping"]
+    assert np.all(np.isfinite(k)) and np.all(np.isfinite(b)) and len(k) == len(rec[1].data["stiffness"])
     assert np.all((k >= k_lo * (1 - 1e-9)) & (k <= k_hi * (1 + 1e-9)))       # inside the action box's map
     assert np.all((b >= b_lo * (1 - 1e-9)) & (b <= b_hi * (1 + 1e-9)))
-    assert not (np.allclose(k, rec["ars"].data["stiffness"]) and np.allclose(b, rec["ars"].data["damping"]))
+    assert not (np.allclose(k, rec[1].data["stiffness"]) and np.allclose(b, rec[1].data["damping"]))
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -255,7 +261,6 @@ def test_continued_gauss_newton_policies_carry_their_recipe_and_act(seed):
     iterations, numbered 6-11, 2 replicates, ridges 0.01…100, from the ``gn`` file of the same seed, its stop guard
     0.9) and act inside the action box, not as the policy they continue."""
     import agents
-    from agents.metrics import rollout
     base = Path(agents.__file__).parent / "trained"
     pol = arc.load_policy(base / f"gn2_CompensatorGains-v0_s{seed}.npz")
     init = arc.load_policy(base / f"gn_CompensatorGains-v0_s{seed}.npz")
@@ -265,15 +270,4 @@ def test_continued_gauss_newton_policies_carry_their_recipe_and_act(seed):
     assert (hp["replicates"], hp["ridges"], hp["init"]) == (2, [0.01, 0.1, 1.0, 10.0, 100.0],
                                                             f"gn_CompensatorGains-v0_s{seed}")
     assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
-    env = gym.make(COMP, episode_seconds=20.0)
-    try:
-        sea, s = env.unwrapped.eval_sea_states()[9]
-        rec = {name: rollout(env, p.bind_env(env), sea, s + 123456) for name, p in (("gn2", pol), ("gn", init))}
-        k_lo, k_hi = env.unwrapped.stiffness_range[:2]
-        b_lo, b_hi = env.unwrapped.damping_range[:2]
-    finally:
-        env.close()
-    k, b = rec["gn2"].data["stiffness"], rec["gn2"].data["damping"]
-    assert np.all((k >= k_lo * (1 - 1e-9)) & (k <= k_hi * (1 + 1e-9)))
-    assert np.all((b >= b_lo * (1 - 1e-9)) & (b <= b_hi * (1 + 1e-9)))
-    assert not (np.allclose(k, rec["gn"].data["stiffness"]) and np.allclose(b, rec["gn"].data["damping"]))
+    _assert_acts_in_box_and_unlike(pol, init)
