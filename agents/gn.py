@@ -250,7 +250,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
 
 
 def default_export(seed: int, feature_set: str = "v2") -> Path:
-    prefix = "gn" if feature_set in ("v1", "v2") else f"gn{feature_set[1:]}"
+    # feature set v3 as "gn_v3": "gn2"/"gn3" name the committed continuations of the v2 search (docs/agents.md)
+    prefix = "gn" if feature_set in ("v1", "v2") else f"gn_{feature_set}"
     return Path("runs") / f"{prefix}_WinchPayout-v0_s{int(seed)}.npz"
 
 
@@ -272,7 +273,7 @@ def main(argv=None) -> int:
     ap.add_argument("--init", default=None, help="start from this ARS/GN policy file (weights copied by feature "
                                                  "name, new features at 0; a GN file's iteration count continues)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz, "
-                                                  "gn3_... for feature set v3)")
+                                                  "gn_v3_... for feature set v3)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
