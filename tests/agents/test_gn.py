@@ -122,12 +122,13 @@ def test_command_line_refuses_out_of_range_arguments(capsys):
     assert str(gn.default_export(1, "v3")) == "runs/gn_v3_WinchPayout-v0_s1.npz"
 
 
-@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4"])
+@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_committed_policies_ship_load_and_act(seed, family):
     """The committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed ``agents``,
     load with their recipe (``gn``: 10 iterations; ``gn2``: 6 more, two replicates, ridges 0.01-100, continued
-    from the ``gn`` file of the same seed; ``gn3``/``gn4``: 8 more each, three replicates, continued from ``gn2``/``gn3``; feature set
+    from the ``gn`` file of the same seed; ``gn3``/``gn4``: 8 more each, three replicates, continued from ``gn2``/``gn3``;
+    ``gn5``: 7 more (its time budget stopped it), three replicates, from ``gn4``; feature set
     v2, the along-cable table's sea states) and act: inside the action box and not the along-cable law itself."""
     from pathlib import Path
 
@@ -140,7 +141,8 @@ def test_committed_policies_ship_load_and_act(seed, family):
         assert pol.meta["iterations"] == 10
     else:
         hp = pol.meta["hyperparameters"]
-        first, its, parent, reps = {"gn2": (10, 6, "gn", 2), "gn3": (16, 8, "gn2", 3), "gn4": (24, 8, "gn3", 3)}[family]
+        first, its, parent, reps = {"gn2": (10, 6, "gn", 2), "gn3": (16, 8, "gn2", 3), "gn4": (24, 8, "gn3", 3),
+                                    "gn5": (32, 7, "gn4", 3)}[family]
         assert (pol.meta["first_iteration"], pol.meta["iterations"]) == (first, its)
         assert hp["init"] == f"{parent}_WinchPayout-v0_s{seed}" and hp["replicates"] == reps
         assert hp["ridges"] == [0.01, 0.1, 1.0, 10.0, 100.0]
