@@ -250,7 +250,7 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
 
 
 def default_export(seed: int, feature_set: str = "v2") -> Path:
-    # feature set v3 as "gn_v3": "gn2", "gn3", "gn4" name the committed continuations of the v2 search (docs/agents.md)
+    # feature set v3 as "gn_v3": "gn2" … "gn5" name the committed continuations of the v2 search (docs/agents.md)
     prefix = "gn" if feature_set in ("v1", "v2") else f"gn_{feature_set}"
     return Path("runs") / f"{prefix}_WinchPayout-v0_s{int(seed)}.npz"
 
