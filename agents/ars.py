@@ -42,7 +42,7 @@ import numpy as np
 from .common import ObsReader, nearest_key
 
 __all__ = ["ARSPolicy", "train", "save_policy", "load_ars_policy", "features_single", "HISTORY_CHANNELS",
-           "INSTANT_CHANNELS", "LAG_STEPS", "FEATURE_SCALES", "TRAIN_SEED_OFFSET", "feature_names"]
+           "INSTANT_CHANNELS", "LAG_STEPS", "FEATURE_SCALES", "TRAIN_SEED_OFFSET", "feature_names", "theta_rows"]
 
 ENV_ID = "towenv/WinchPayout-v0"
 #: channels whose recent history the policy sees, and the lags (control steps of 0.1 s): 0, 0.2, …, 2.0 s
@@ -414,6 +414,22 @@ def train(seed: int = 0, minutes: float = 40.0, max_iterations: int = 1000, dire
 
 
 # ============================================================================ files
+def theta_rows(policy: ARSPolicy, seas, names) -> np.ndarray:
+    """(len(seas), len(names)) weights of ``policy`` for each sea state in ``seas`` (its nearest sea-state key), placed
+    by feature name in the wider feature list ``names`` (0 for features the policy does not have); ValueError naming
+    the policy's features that ``names`` lacks (its feature set does not nest in the batch's)."""
+    own = feature_names(policy.feature_set)
+    missing = [nm for nm in own if nm not in names]
+    if missing:
+        raise ValueError(f"policy {policy.name!r} (feature set {policy.feature_set!r}) has features {missing[:3]}"
+                         f"{' …' if len(missing) > 3 else ''} that the batch's feature list does not have")
+    cols = [names.index(nm) for nm in own]
+    out = np.zeros((len(seas), len(names)))
+    for e, sea in enumerate(seas):
+        out[e, cols] = policy.theta[nearest_key(policy.theta, sea)]
+    return out
+
+
 def save_policy(policy: ARSPolicy, path: str | Path) -> Path:
     """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON),
     atomically."""

@@ -24,7 +24,6 @@ def main(argv=None) -> int:
 
     import towenv  # noqa: F401
     from agents import ars
-    from agents.common import nearest_key
     from towenv.envs.vector import WinchPayoutVectorEnv
     try:
         pols = [ars.load_ars_policy(f) for f in a.policies]
@@ -40,16 +39,7 @@ def main(argv=None) -> int:
     names = ars.feature_names(fs)
     if any(not set(ars.feature_names(p.feature_set)) <= set(names) for p in pols):
         ap.error("the policies' feature sets do not nest")
-    th = [np.zeros((len(ents), len(names)))]
-    for p in pols:
-        pn = ars.feature_names(p.feature_set)
-        t = np.zeros((len(ents), len(names)))
-        for e, (sea, _s) in enumerate(ents):
-            w = p.theta[nearest_key(p.theta, sea)]
-            for i, nm in enumerate(names):
-                if nm in pn:
-                    t[e, i] = w[pn.index(nm)]
-        th.append(t)
+    th = [np.zeros((len(ents), len(names)))] + [ars.theta_rows(p, [sea for sea, _s in ents], names) for p in pols]
     n = len(ents) * (len(pols) + 1)
     kw = {} if a.episode_seconds is None else {"episode_seconds": float(a.episode_seconds)}
     venv = WinchPayoutVectorEnv(num_envs=n, autoreset_mode="NextStep", batch_infos=True, **kw)

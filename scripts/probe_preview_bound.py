@@ -105,7 +105,6 @@ def evaluate(ars, files, replicates=2, episode_seconds=None):
     import gymnasium as gym
 
     import towenv  # noqa: F401
-    from agents.common import nearest_key
     from towenv.envs.vector import WinchPayoutVectorEnv
     pols = [ars.load_ars_policy(f) for f in files]
     env = gym.make(ars.ENV_ID)
@@ -113,16 +112,7 @@ def evaluate(ars, files, replicates=2, episode_seconds=None):
     env.close()
     ents = [(ev[i][0], ev[i][1] + 100 * r, i) for r in range(replicates) for i in ENTRIES]
     names = ars.feature_names("v2p")
-    th = [np.zeros((len(ents), len(names)))]
-    for p in pols:
-        pn = ars.feature_names(p.feature_set)
-        t = np.zeros((len(ents), len(names)))
-        for e, (sea, _s, _i) in enumerate(ents):
-            w = p.theta[nearest_key(p.theta, sea)]
-            for i, nm in enumerate(names):
-                if nm in pn:
-                    t[e, i] = w[pn.index(nm)]
-        th.append(t)
+    th = [np.zeros((len(ents), len(names)))] + [ars.theta_rows(p, [e[0] for e in ents], names) for p in pols]
     k = len(pols) + 1
     kw = {} if episode_seconds is None else {"episode_seconds": float(episode_seconds)}
     venv = WinchPayoutVectorEnv(num_envs=len(ents) * k, autoreset_mode="NextStep", batch_infos=True, **kw)
@@ -154,7 +144,7 @@ def main(argv=None):
     t.add_argument("--iterations", type=int, default=8, help="Gauss-Newton iterations (1..17 after gn4)")
     t.add_argument("--replicates", type=int, default=1, help="wave seeds per entry per iteration (1..10)")
     t.add_argument("--export", required=True, help="policy file to write")
-    e = sub.add_parser("evaluate", help="compare policy files (v2 or v2p) on the evaluation set, codes 4-5")
+    e = sub.add_parser("evaluate", help="compare policy files (v1, v2 or v2p; not v3) on the evaluation set, codes 4-5")
     e.add_argument("policies", nargs="+")
     e.add_argument("--replicates", type=int, default=2, help="wave seeds +0, +100, ... per entry (1..5)")
     e.add_argument("--episode-seconds", type=float, default=None, help="episode length (default: the environment's)")

@@ -67,3 +67,38 @@ def test_evaluate_scores_zero_residual_as_along_cable(tmp_path, capsys):
     with pytest.raises(SystemExit) as ex:
         probe.main(["evaluate", str(zero), "--replicates", "9"])
     assert ex.value.code == 2
+
+
+def test_evaluate_refuses_a_policy_whose_features_it_cannot_see(tmp_path, capsys):
+    """A v3 policy (own past actions, longer history) does not nest in v2p: refused with exit 2 naming the feature
+    set, rather than evaluated with its extra weights silently dropped."""
+    probe = load_script("probe_preview_bound")
+    table = dict(load_tuned()["along_cable"])
+    v3 = ars.save_policy(ars.ARSPolicy({k: np.full(ars.n_features("v3"), 0.01) for k in table}, table,
+                                       feature_set="v3"), tmp_path / "v3.npz")
+    with pytest.raises(SystemExit) as ex:
+        probe.main(["evaluate", str(v3), "--replicates", "1", "--episode-seconds", "64"])
+    assert ex.value.code == 2 and "'v3'" in capsys.readouterr().err
+    assert "v2p" not in ars.FEATURE_SETS                       # the context was left cleanly
+
+
+def test_theta_rows_places_weights_by_feature_name():
+    """agents.ars.theta_rows: a v1 policy's weights land on the v1 names inside the v2 list (the v2-only columns stay
+    0), each row the weights of its sea state; a v2 policy does not fit the v1 list (ValueError)."""
+    table = dict(load_tuned()["along_cable"])
+    rng = np.random.default_rng(3)
+    pol = ars.ARSPolicy({k: rng.normal(size=ars.n_features("v1")) for k in table}, table, feature_set="v1")
+    names2, names1 = ars.feature_names("v2"), ars.feature_names("v1")
+    env = gym.make(ars.ENV_ID)
+    seas = [sea for sea, _s in env.unwrapped.eval_sea_states()]
+    env.close()
+    from agents.common import nearest_key
+    rows = ars.theta_rows(pol, seas, names2)
+    assert rows.shape == (len(seas), len(names2))
+    for e, sea in enumerate(seas):
+        w = pol.theta[nearest_key(pol.theta, sea)]
+        assert np.array_equal(rows[e, [names2.index(nm) for nm in names1]], w)
+        assert not rows[e, [i for i, nm in enumerate(names2) if nm not in names1]].any()
+    with pytest.raises(ValueError, match="feature set 'v2'"):
+        ars.theta_rows(ars.ARSPolicy({k: np.zeros(ars.n_features("v2")) for k in table}, table, feature_set="v2"),
+                       seas, names1)
