@@ -60,8 +60,8 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         env["NUMBA_CACHE_DIR"] = str(Path(tmp) / "numba")
         out = Path(tmp) / "out"
-        cmd = [sys.executable, "-m", "towenv", "simulate", "two_part_tow_1", "--duration", "120", "--out", str(out),
-               "--no-plots", "-q"]
+        # README command 1 as a user runs it (progress bar, plots), its output in the temporary folder
+        cmd = [sys.executable, "-m", "towenv", "simulate", "two_part_tow_1", "--duration", "120", "--out", str(out)]
         cold_cpu, cold_wall, p = _child_cpu(cmd, env)
         if p.returncode != 0:
             sys.exit(f"bench_startup: the first run failed:\n{p.stderr}")
@@ -71,7 +71,10 @@ def main(argv=None):
     print(f"# towenv first use — Python {sys.version.split()[0]}, {os.cpu_count()} cores, {opt}")
     print(f"import towenv: median {statistics.median(imports):.2f} s wall (min {min(imports):.2f}, max "
           f"{max(imports):.2f}; {len(imports)} fresh processes; goal ≤ 1 s)")
-    print("README command 1 (towenv simulate two_part_tow_1 --duration 120, no plots):")
+    src = subprocess.run([sys.executable, "-c", "import towenv; print(towenv.__file__)"], env=env,
+                         capture_output=True, text=True).stdout.strip()
+    print(f"towenv measured: {src}")
+    print("README command 1 (towenv simulate two_part_tow_1 --duration 120 --out ..., with its plots):")
     print(f"  empty numba cache:  {cold_cpu:6.1f} s CPU ({cold_wall:.1f} s wall)")
     print(f"  cache filled:       {warm_cpu:6.1f} s CPU ({warm_wall:.1f} s wall)")
     print(f"  compilation:        {cold_cpu - warm_cpu:6.1f} s CPU (goal ≤ 30 s)")

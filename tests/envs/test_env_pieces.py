@@ -48,6 +48,7 @@ import pytest
 gym = pytest.importorskip("gymnasium")
 
 import towenv.envs  # noqa: E402,F401  (registers the ids)
+from towenv.core.model import NO_RECORDING  # noqa: E402
 from towenv.envs.checks import ConfigError  # noqa: E402
 from towenv.envs.compensator import CompensatorGainsEnv  # noqa: E402
 from towenv.envs.pieces import Limit, Limits, PartedOrGrounded, Termination  # noqa: E402
@@ -194,7 +195,7 @@ def test_kernel_data_runs_the_kernel_as_advance_steps_does():
     assert all(x is y for x, y in zip(kd.head, kd.args)) and kd.head[len(kd.args)] is kd.settings
     n, dt = 40, a.dt
     tops = a.path.position(np.arange(1, n + 1) * dt)
-    st, _, _, _ = K.advance(n, dt, tops, *kd.head, 0.0, kd.wave)
+    st, _, _, _ = K.advance(n, dt, tops, *kd.head, 0.0, kd.wave, NO_RECORDING)
     a.step_count += n
     b.advance_steps(n)
     assert st == K.OK

@@ -140,7 +140,7 @@ def kernel_and_twin_step(sim):
     status and iterations, states equal to 1e-9 of their size. Returns the twin's step."""
     top = sim.path.position(np.array([sim.t + sim.dt]))[0]
     res = twin.houbolt_step_np(sim, sim.dt, top)
-    st, it, el, md = K.houbolt_step(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
+    st, it, el, md = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
     assert st == K.OK and res.status == twin.OK and it == res.iterations
     for key in ("hist_r", "tens_hist", "hist_ang", "top_react"):
         a, b = getattr(res, key), getattr(sim, key)

@@ -34,7 +34,7 @@ def test_estimate_stop_kernel_matches_twin():
         # how many iterations the plain rule would take from the same state
         plain = twin.houbolt_step_np(_with_stop(state, sim, "change"), sim.dt, top)
         state = twin.houbolt_step_np(state, sim.dt, top)
-        st, it, el, md = K.houbolt_step(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws,
+        st, it, el, md = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws,
                                         sim.comp)
         sim.step_count += 1
         assert st == K.OK and state.status == twin.OK, k

@@ -118,7 +118,7 @@ def test_kernel_matches_twin_on_the_light_connector():
     for _ in range(20):
         top = sim._tow_points(sim.step_count + 1, 1)[0]
         state = twin.houbolt_step_np(state, sim.dt, top)
-        st, it, _, _ = K.houbolt_step(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
+        st, it, _, _ = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
         sim.step_count += 1
         assert st == K.OK and state.status == twin.OK
         assert it == state.iterations

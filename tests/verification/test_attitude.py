@@ -163,7 +163,7 @@ def test_houbolt_step_from_a_recharted_state_matches_twin():
     charted_r = sim.hist_r[0].copy()
     charted_att = [twin.body_rotation_np(sim.hist_ang[0, b], sim.body_chart[b]) for b in range(nb)]
     sim.restore(plain)
-    st, *_ = K.houbolt_step(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
+    st, *_ = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
     assert st == K.OK
     # local error of one step: positions within 1e-6 m, attitudes within 1e-6 rad
     assert np.max(np.abs(sim.hist_r[0] - charted_r)) < 1e-6

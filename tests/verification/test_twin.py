@@ -363,7 +363,7 @@ def _dynamic_sim(name, seconds=2.0):
 
 
 def _kernel_step(sim, dt, top):
-    st, it, el, md = K.houbolt_step(dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
+    st, it, el, md = K.houbolt_step_entry(dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
     return st, it
 
 
@@ -446,7 +446,7 @@ def test_failed_houbolt_step_matches_twin_and_leaves_state():
                          body_chart=sim.body_chart)
     res = twin.houbolt_step_np(like, dt, top)
     before = sim.snapshot()
-    st, it, el, md = K.houbolt_step(dt, top, *sim._args, settings, sim._state, sim._ws, sim.comp)
+    st, it, el, md = K.houbolt_step_entry(dt, top, *sim._args, settings, sim._state, sim._ws, sim.comp)
     assert st == res.status == K.FAIL_NEWTON
     assert it == res.iterations == probe.iterations - 1
     assert el == res.element

@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 
-from .jit import njit
+from .jit import njit, njit_internal
 from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_AFT_TOW_POINT, BP_CB, BP_REDUCED_DOF, BP_TAIL_MASS, COMPENSATOR,
                      COMP_FORCE, COMP_PASSIVE, COMP_POSITION, CS_ACT, CS_CONTACT, CS_HITS, CS_PEN, C_CMD, C_MODE,
-                     C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
+                     C_B, C_K, C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
                      FAIL_STRETCH, FREE, NEED_REMESH, N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS,
                      N_STEP_CUTS, OK, PITCH_LIMIT, RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED,
                      S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH,
@@ -26,7 +26,7 @@ from .tension_solve import (_positions_from_tensions, assemble_tension_system, t
                             tree_ldlt_solve)
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """Advance one step of size dt. Returns (status, iterations, element, max|δT| of the last iteration).
 
@@ -90,13 +90,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             tmp33)
 
     # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
-    any_aft = False
-    any_merged = False
-    for b in range(nb):
-        if body_aft_node[b] >= 0:
-            any_aft = True
-            if tn_nseg[body_aft_node[b]] == 0:
-                any_merged = True
+    any_aft, any_merged = series_flags(body_aft_node, tn_nseg)
     status = FAIL_NEWTON
     elem = -1
     it = 0
@@ -177,7 +171,24 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     return OK, it, -1, maxd
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
+def series_flags(body_aft_node, tn_nseg):
+    """(any body tows a tail from an aft tow point, any such point is merged into its body's node).
+
+    A function of its own for the compiler's sake: computed inline from ``False`` literals, numba's type
+    inference first saw ``any_aft`` as the literal ``False`` and compiled the phases that take it
+    (:func:`iterate_coefficients`, :func:`node_local_solve`) a second time for that type."""
+    any_aft = False
+    any_merged = False
+    for b in range(body_aft_node.shape[0]):
+        if body_aft_node[b] >= 0:
+            any_aft = True
+            if tn_nseg[body_aft_node[b]] == 0:
+                any_merged = True
+    return any_aft, any_merged
+
+
+@njit_internal
 def actuator_lag(dt, comp, cmode, cstate):
     """The compensator actuator's command after this step: first-order lag with a rate limit (explicit, once per
     step) in position/force mode; its current value otherwise."""
@@ -192,7 +203,7 @@ def actuator_lag(dt, comp, cmode, cstate):
     return act_new
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def predict(top_node, r_top_new, hist_r, hist_ang, tens_hist, chart, body_node, body_aft_node, bp, rs, angs, tens,
             tmp33):
     """Predictor of the Newton iteration: positions and body angles extrapolated from the last three time levels
@@ -214,7 +225,7 @@ def predict(top_node, r_top_new, hist_r, hist_ang, tens_hist, chart, body_node, 
         tens[s] = tp if tp > 0.0 else 0.0
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, flow, seg_lo, seg_up, node_kind,
                          node_nseg, node_segs, node_sgn, body_node, body_aft_node, l0, diam, mu, cn, ct, can, cat, ea,
                          bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g, cur_z, cur_v, chart, rs, vs, angs,
@@ -310,7 +321,7 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
     return False
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind, node_nseg,
                      node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens, mnode, bnode, fnode,
                      acon, qvec, att, tmp33, tmp33b, hvec, tmp3, tn_nseg, tn_segs, haft):
@@ -416,7 +427,7 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
     return -1
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def tension_system(seg_lo, seg_up, tseg_up, node_kind, node_nseg, node_segs, node_sgn, l0, ea, tang, qvec, acon, tens,
                    rs, angs, chart, body_node, body_aft_node, bp, tmp33, gres, rhs, kd, kb, own_nseg, qaft):
     """The Newton system of the segment tensions on the tree: positions at the current tensions, the length
@@ -475,7 +486,7 @@ def tension_system(seg_lo, seg_up, tseg_up, node_kind, node_nseg, node_segs, nod
     return tmax
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, tens, rs):
     """The Newton update T ← max(T + δT, 0) and the node positions at the new tensions (same coefficients).
     Returns (segment of the largest change, the largest change — NaN-safe —, any segment slack)."""
@@ -499,7 +510,7 @@ def tension_apply(node_kind, node_nseg, node_segs, node_sgn, acon, qvec, dT, ten
     return elem, maxd, any_slack
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def aft_node_point_mass(b, a, c, dt, lam, rs, r_t, r_tm1, r_tm2, mnode, bnode, pmass, astar):
     """For the condensation of a body with a monolithically coupled tail (``body_dynamics._condense``): the aft
     node's mass and drag damping, P_m = Λ (M_c + (11Δt/12) B_c) Λᵀ (body axes) — they ride on the aft point —
@@ -523,7 +534,7 @@ def aft_node_point_mass(b, a, c, dt, lam, rs, r_t, r_tm1, r_tm2, mnode, bnode, p
             astar[i] += lam[i, k] * ak
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def iterate_omega_dot(dt, b, angs, hist_ang, dang, omg, out, zero, w):
     """The body angular acceleration ω̇* = W θ̈* + Ẇ θ̇ of the iterate's Euler angles (Houbolt θ̈*), into
     ``out``; ``zero``: (3,) scratch, ``w``: (3, 3) scratch."""
@@ -547,7 +558,7 @@ def iterate_omega_dot(dt, b, angs, hist_ang, dang, omg, out, zero, w):
     out[2] = -sb * e1 + ca * cb * e2
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def aft_point_influence(dt, planar, body_node, body_aft_node, tn_nseg, tn_segs, own_nseg, bp, blam, angs, bX,
                         bkc, gaft, tang, qvec, qaft, w, m):
     """Monolithic series coupling: ∂r_c/∂T_k (per unit σ_k T_k, like ``qvec``) of each merged aft tow point c for
@@ -624,7 +635,7 @@ def aft_point_influence(dt, planar, body_node, body_aft_node, tn_nseg, tn_segs, 
                 qaft[b, k, i] = qvec[a, k, i] + lam[0, i] * u0 + lam[1, i] * u1 + lam[2, i] * u2
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def aft_pull_on_rotation(body_aft_node, tn_nseg, node_nseg, node_segs, node_sgn, tang, tens, gaft, by):
     """Monolithic series coupling: the tail segments' pull at the new tensions, f = Σ σ T t over the aft node's
     segments, added to the body's angular acceleration term, y_b += G_b f (its moment about the tow point;
@@ -646,7 +657,7 @@ def aft_pull_on_rotation(body_aft_node, tn_nseg, node_nseg, node_segs, node_sgn,
             by[b, i] += gaft[b, i, 0] * f0 + gaft[b, i, 1] * f1 + gaft[b, i, 2] * f2
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, omg, blam, body_node, bp, bX, by, bkc,
                       tmp3, hvec, body_aft_node, tn_nseg):
     """Body rotations at the new node positions: ω̇ = A_rr⁻¹(M − A_rt a) from the condensed body equations,
@@ -689,7 +700,7 @@ def body_angle_update(dt, planar, r_t, r_tm1, r_tm2, rs, hist_ang, angs, dang, o
     return -1, dang_max
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def end_stop_contact(dt, top_node, cnode, comp, r_t, r_tm1, r_tm2, rs, node_nseg, node_segs, node_sgn, tang, tens,
                      mnode, fnode):
     """The compensator's end-stop active set (passive/force mode): True when the converged step contradicts the
@@ -713,7 +724,7 @@ def end_stop_contact(dt, top_node, cnode, comp, r_t, r_tm1, r_tm2, rs, node_nseg
     return False
 
 
-@njit(cache=True, _nrt=False)
+@njit_internal
 def commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, tens, rs, angs, r_t, r_tm1, r_tm2,
            hist_r, hist_ang, tens_hist, top_react, react, node_nseg, node_segs, node_sgn, tang, mnode, fnode):
     """Checks of the converged step (strain limit, finite positions) and, if they pass, the commit: the top
@@ -763,22 +774,43 @@ def commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, te
     return OK, -1
 
 
-@njit(cache=True)
+@njit_internal
 def _quad_interp(y1, y0, ym1, tau):
     """Quadratic through (τ=1, y1), (0, y0), (−1, ym1) evaluated at τ (history re-spacing)."""
     return ym1 * tau * (tau - 1.0) * 0.5 + y0 * (1.0 - tau * tau) + y1 * tau * (tau + 1.0) * 0.5
 
 
-@njit(cache=True)
+@njit_internal
 def _quad3(y0, ym1, ym2, tau):
     """Quadratic through (0, y0), (−1, ym1), (−2, ym2) evaluated at τ ≤ 0 (in units of the old step)."""
     return y0 * (tau + 1.0) * (tau + 2.0) * 0.5 - ym1 * tau * (tau + 2.0) + ym2 * tau * (tau + 1.0) * 0.5
 
 
-@njit(cache=True)
+@njit_internal
+def _copy_into(dst, src):
+    """dst[:] = src for 1-D arrays, as a loop (a slice assignment needs numba's reference counting)."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit_internal
+def _copy_step_state(hist_r, hist_ang, tens_hist, cstate, to_r, to_ang, to_tens, to_cstate):
+    """Copy the time levels a step changes (positions, body angles, tensions, compensator state) into the
+    ``to_*`` arrays of the same shapes: the save before a step cut, and the restore after a failed one."""
+    _copy_into(to_r.reshape(-1), hist_r.reshape(-1))
+    _copy_into(to_ang.reshape(-1), hist_ang.reshape(-1))
+    _copy_into(to_tens.reshape(-1), tens_hist.reshape(-1))
+    _copy_into(to_cstate.reshape(-1), cstate.reshape(-1))
+
+
+@njit(cache=True, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline="always")
 def _step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     """houbolt_step with the end-stop active set: start from the contact state of the last step and redo
-    the step (at most twice) when the converged solution contradicts it."""
+    the step (at most twice) when the converged solution contradicts it.
+
+    Inlined into :func:`advance` by numba (``inline="always"``; a few lines): as a compiled function of its own
+    it was one more level that links and re-generates the machine code of the whole step below it (numba
+    links every callee's code into each caller's library), ~3–5 s of the first run's compilation."""
     cstate = state.cstate
     comp[C_TRIAL] = cstate[CS_CONTACT]
     its = 0
@@ -790,10 +822,51 @@ def _step(dt, top, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
     return FAIL_NEWTON, its, el, md
 
 
-@njit(cache=True)
+@njit_internal
+def record_row(rec, j, hist_r, hist_ang, chart, tens_hist, top_react, comp):
+    """Write record j of this ``advance`` call into ``rec`` (:class:`towenv.core.model.Recording`)."""
+    i = rec.plan[1] + j
+    R, RB, A, C, T, F, bnodes = rec.R, rec.RB, rec.A, rec.C, rec.T, rec.F, rec.bnodes
+    nn = hist_r.shape[1]
+    nb = hist_ang.shape[1]
+    for a in range(nn):
+        for c in range(3):
+            R[i, a, c] = hist_r[0, a, c]
+    for lv in range(3):
+        for b in range(bnodes.shape[0]):
+            for c in range(3):
+                RB[i, lv, b, c] = hist_r[lv, bnodes[b], c]
+        for b in range(nb):
+            for c in range(3):
+                A[i, lv, b, c] = hist_ang[lv, b, c]
+    for b in range(nb):
+        for r in range(3):
+            for c in range(3):
+                C[i, b, r, c] = chart[b, r, c]
+    for s in range(tens_hist.shape[1]):
+        T[i, s] = tens_hist[0, s]
+    for c in range(3):
+        F[i, c] = top_react[c]
+    if rec.CZ.shape[0] > 0:
+        for lv in range(3):
+            rec.CZ[j, lv, 0] = hist_r[lv, rec.cnodes[0], 2]
+            rec.CZ[j, lv, 1] = hist_r[lv, rec.cnodes[1], 2]
+        rec.CKB[j, 0] = comp[C_K]
+        rec.CKB[j, 1] = comp[C_B]
+
+
+@njit(cache=True, _nrt=False)
 def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, state, ws, saved, counters,
-            comp, winch, wstate, t0, wave):
+            comp, winch, wstate, t0, wave, rec):
     """Advance ``n_steps`` steps of size ``dt``; ``top_path[k]`` is the vessel tow point at the end of step k.
+
+    ``rec`` (:class:`towenv.core.model.Recording`): with ``rec.plan[0] = every > 0`` a record is written after
+    every ``every`` steps (``towenv.simulate``'s compiled recording), and the time of step k is reckoned from
+    its record's start, ``(plan[2] + every·j)·dt + (k − every·j + 1)·dt``, as a loop of ``advance`` calls of
+    ``every`` steps from Python would (bit-identical to it); ``Recording.none()``: no records, times
+    ``t0 + (k + 1)·dt``. The recording lives here rather than in a compiled loop around ``advance`` because
+    numba links each callee's code into its caller and generates it again there: a loop around ``advance``
+    was one more such level, ~10 % of the first run's compilation.
 
     ``state = (hist_r, hist_ang, tens_hist, top_react, cstate, chart)``: ``hist_ang`` holds each rigid body's
     Euler angles at the last three time levels *relative to its chart* ``chart[b]`` (see ``body_rotation``);
@@ -815,15 +888,15 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     nn = hist_r.shape[1]
     nb = hist_ang.shape[1]
     ns = tens_hist.shape[1]
-    top_sub = np.empty(3)
-    rc_lam = np.empty((3, 3))
-    rc_lam0 = np.empty((3, 3))
-    rc_new = np.empty((3, 3))
-    rc_tmp = np.empty(3)
+    # scratch from the work arrays, not allocated here: advance is compiled without reference counting
+    top_sub = ws.top_sub
+    rc_lam, rc_lam0, rc_new, rc_tmp = ws.att, ws.atr, ws.arr, ws.tmp3     # the re-chart runs between steps
     rc_pitch = settings[S_RECHART_PITCH] if settings.shape[0] > S_RECHART_PITCH else RECHART_PITCH
     wmode = int(winch[W_MODE])
     wseg = int(winch[W_SEG])
     flow = ws.flow
+    every = rec.plan[0]
+    rec_step0 = rec.plan[2]
     for k in range(n_steps):
         # moving attitude chart: a body whose local pitch has passed RECHART_PITCH restarts from a chart
         # centred on its current attitude (between steps, so a failed step's retries stay in one chart)
@@ -832,7 +905,12 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                 rechart_body(b, hist_ang, chart, rc_lam, rc_lam0, rc_new, rc_tmp)
                 if counters.shape[0] > 4:
                     counters[N_RECHARTS] += 1
-        _wave_flow(t0 + (k + 1) * dt, hist_r[0], hist_r[1], hist_r[2], wave, flow)
+        if every > 0:
+            jr = k // every
+            t_k = (rec_step0 + every * jr) * dt + (k - every * jr + 1) * dt
+        else:
+            t_k = t0 + (k + 1) * dt
+        _wave_flow(t_k, hist_r[0], hist_r[1], hist_r[2], wave, flow, ws.flow_v)
         dl = 0.0
         l_old = 0.0
         v_new = 0.0
@@ -847,10 +925,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
         if it > counters[N_MAX_ITERATIONS]:
             counters[N_MAX_ITERATIONS] = it
         if st != OK:
-            s_hist_r[:] = hist_r
-            s_hist_ang[:] = hist_ang
-            s_tens[:] = tens_hist
-            s_cstate[:] = cstate
+            _copy_step_state(hist_r, hist_ang, tens_hist, cstate, s_hist_r, s_hist_ang, s_tens, s_cstate)
             ok = False
             for cut in range(1, max_cuts + 1):
                 nsub = 2 ** cut
@@ -867,7 +942,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                 for s in range(ns):
                     tens_hist[0, s] = s_tens[0, s]
                     tens_hist[1, s] = s_tens[0, s]
-                cstate[:] = s_cstate
+                _copy_into(cstate.reshape(-1), s_cstate.reshape(-1))
                 good = True
                 for j in range(1, nsub + 1):
                     tau = j / nsub
@@ -895,10 +970,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                     ok = True
                     break
             if not ok:
-                hist_r[:] = s_hist_r
-                hist_ang[:] = s_hist_ang
-                tens_hist[:] = s_tens
-                cstate[:] = s_cstate
+                _copy_step_state(s_hist_r, s_hist_ang, s_tens, s_cstate, hist_r, hist_ang, tens_hist, cstate)
                 if wmode > 0:
                     l0[wseg] = l_old
                 return st, k, el, md
@@ -908,4 +980,13 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             wstate[WS_PAID] += dl
             if l0[wseg] > 1.5 * winch[W_LNOM] or (l0[wseg] < 0.5 * winch[W_LNOM] and dl < 0.0):
                 return NEED_REMESH, k, wseg, 0.0
+        if every > 0 and (k + 1) % every == 0:
+            record_row(rec, (k + 1) // every - 1, hist_r, hist_ang, chart, tens_hist, state.top_react, comp)
     return OK, -1, -1, 0.0
+
+
+@njit(cache=True, _nrt=False)
+def houbolt_step_entry(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp):
+    """:func:`houbolt_step` callable from Python (the tests' entry: the step itself is compiled without a Python
+    wrapper, :func:`towenv.core.jit.njit_internal`). Compiled on first use only."""
+    return houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, state, ws, comp)

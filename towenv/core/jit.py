@@ -40,6 +40,15 @@ def njit(*args, **kw):
     return _njit(*args, **kw)
 
 
+def njit_internal(fn):
+    """:func:`njit` for a kernel that only compiled code calls: cached, without numba's reference counting
+    (it must not allocate) and without the Python and C entry points numba builds for every compiled
+    function. Those wrappers unbox or box every array of the kernels' large argument structures (the
+    Houbolt step's ~100 arrays): measured, they were about a third of the compile time of ``houbolt._step``.
+    Calling such a kernel from Python raises; tests go through a compiled entry (``houbolt_step_entry``)."""
+    return njit(cache=True, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)(fn)
+
+
 def kernel_sources_digest(package_root: Path | None = None) -> str:
     """SHA-1 over the sources of every module in :data:`KERNEL_FOLDERS` (names and contents)."""
     root = package_root or Path(__file__).resolve().parent.parent

@@ -41,4 +41,4 @@ from .tension_solve import (_positions_from_tensions, assemble_tension_system, t
                             tree_ldlt_solve)
 from .actuators import _compensator_node, _end_stop_force, _winch_speed  # noqa: F401
 from .orbital_flow import _wave_flow, wave_orbital_velocity  # noqa: F401
-from .houbolt import _quad3, _quad_interp, _step, advance, houbolt_step  # noqa: F401
+from .houbolt import _quad3, _quad_interp, _step, advance, houbolt_step, houbolt_step_entry  # noqa: F401

@@ -12,6 +12,7 @@ arrays); the named structures below are what the kernels receive, one per physic
 * :class:`TimeLevels` ....... the dynamic state: three time levels of node positions and body angles, two of
   tensions, the top reaction, the compensator state, the bodies' attitude charts
 * :class:`SavedStep` ........ the last good step (roll-back on divergence)
+* :class:`Recording` ........ where the Houbolt ``advance`` writes records (``towenv.simulate``), or nothing
 * :class:`HouboltWork` / :class:`ExplicitWork` ... the schemes' work arrays, each allocated by ``allocate``
 
 They are ``typing.NamedTuple`` classes: numba compiles them as tuples (measured: no cost against the plain
@@ -159,6 +160,8 @@ class HouboltWork(NamedTuple):
     gaft: np.ndarray            # (nb, 3, 3) monolithic series coupling: ω̇ += G f for a global force f at the aft point
     haft: np.ndarray            # (nb, 3, 3) ... and the tow-point node's force += H f (body_dynamics.aft_transfer)
     qaft: np.ndarray            # (nb, k, 3) ... ∂r_aft/∂T of the tow-point node's tension-tree list (rotation included)
+    top_sub: np.ndarray         # (3,) the tow point of a sub-step (houbolt.advance's step cuts)
+    flow_v: np.ndarray          # (3,) scratch of the orbital-velocity evaluation (orbital_flow._wave_flow)
 
     @staticmethod
     def allocate(nn: int, ns: int, nb: int) -> "HouboltWork":
@@ -170,7 +173,39 @@ class HouboltWork(NamedTuple):
             z((nb, 3, 3)), z((nb, 3)), z((nb, 3, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)),
             z(3), z(3), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)),
             z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)), z((6, ns)),
-            z((nb1, 3, 3)), z((nb1, 3, 3)), z((nb1, mk, 3)))
+            z((nb1, 3, 3)), z((nb1, 3, 3)), z((nb1, mk, 3)), z(3), z(3))
+
+
+class Recording(NamedTuple):
+    """Where :func:`towenv.core.houbolt.advance` writes a record every ``plan[0]`` steps (``towenv.simulate``'s
+    compiled recording, :mod:`towenv.core.recording`); ``plan[0] == 0``: no recording (:meth:`none`).
+    ``plan = [steps per record, row of the first record, step count at the call's start]``. After record j
+    (0-based) of the call: ``R[row]`` node positions, ``RB[row]`` the body nodes' three time levels, ``A[row]``
+    body angles, ``C[row]`` attitude charts, ``T[row]`` tensions, ``F[row]`` top reaction (row = plan[1] + j);
+    ``CZ[j]`` the sheave and ship heights (three levels), ``CKB[j]`` the compensator's k, b (empty without
+    one)."""
+    plan: np.ndarray            # int64 (3,)
+    bnodes: np.ndarray          # int64 (nbn,) body nodes
+    cnodes: np.ndarray          # int64 (2,) sheave node, ship (top) node
+    R: np.ndarray               # (n, nn, 3)
+    RB: np.ndarray              # (n, 3, nbn, 3)
+    A: np.ndarray               # (n, 3, nb, 3)
+    C: np.ndarray               # (n, nb, 3, 3)
+    T: np.ndarray               # (n, ns)
+    F: np.ndarray               # (n, 3)
+    CZ: np.ndarray              # (m, 3, 2)
+    CKB: np.ndarray             # (m, 2)
+
+    @staticmethod
+    def none() -> "Recording":
+        """No recording (the arrays are empty; same types as a real one, so ``advance`` compiles once)."""
+        i, z = np.zeros, np.zeros
+        return Recording(i(3, np.int64), i(0, np.int64), i(2, np.int64), z((0, 0, 3)), z((0, 3, 0, 3)),
+                         z((0, 3, 0, 3)), z((0, 0, 3, 3)), z((0, 0)), z((0, 3)), z((0, 3, 2)), z((0, 2)))
+
+
+#: ``advance(..., rec=NO_RECORDING)``: no records (shared; its arrays are empty and never written)
+NO_RECORDING = Recording.none()
 
 
 class ExplicitWork(NamedTuple):
@@ -251,4 +286,5 @@ class AlphaTrial(NamedTuple):
 
 
 __all__ = ["AlphaState", "AlphaTrial", "Topology", "Segments", "Bodies", "Water", "WaveField", "TimeLevels", "SavedStep", "HouboltWork",
+           "Recording", "NO_RECORDING",
            "ExplicitWork", "MAX_SEGS_PER_NODE"]

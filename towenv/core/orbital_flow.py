@@ -32,14 +32,14 @@ def wave_orbital_velocity(x, y, z, t, amp, omega, kx, ky, k, phase, out):
 
 
 @njit(cache=True)
-def _wave_flow(t, r_t, r_tm1, r_tm2, wave, flow):
+def _wave_flow(t, r_t, r_tm1, r_tm2, wave, flow, v):
     """Orbital velocity at every node's predicted position for the step ending at t (frozen during the
     step's Newton iteration). ``wave`` is a :class:`towenv.core.model.WaveField`; ``wave.options =
     [enabled, z_cut]``: nodes below ``z_cut`` (where every component has decayed below
-    1e-6 m/s) are skipped."""
+    1e-6 m/s) are skipped. ``v``: a (3,) scratch array (nothing here allocates: ``houbolt.advance`` is compiled
+    without reference counting)."""
     amp, omega, kx, ky, k, phase, opts = wave.amplitude, wave.omega, wave.kx, wave.ky, wave.k, wave.phase, wave.options
     nn = flow.shape[0]
-    v = np.empty(3)
     for a in range(nn):
         flow[a, 0] = 0.0
         flow[a, 1] = 0.0

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels as K
+from .model import NO_RECORDING
 
 METHODS = ("houbolt", "generalized_alpha", "newmark", "euler", "rk2", "rk4", "quasi_static")
 
@@ -80,7 +81,7 @@ class HouboltScheme(TimeScheme):
         while done < len(tops):
             st, k, el, md = K.advance(len(tops) - done, dt, tops[done:], *sim._args, settings, sim._state,
                                       sim._ws, sim._saved, sim.counters, sim.comp, sim.winch, sim.wstate,
-                                      t_start + done * dt, sim._wave_arrays())
+                                      t_start + done * dt, sim._wave_arrays(), NO_RECORDING)
             if st == K.OK:
                 return
             if st == K.NEED_REMESH:
@@ -91,7 +92,7 @@ class HouboltScheme(TimeScheme):
 
     def warm_up(self):
         kd = self.sim.kernel_data()
-        K.advance(0, self.sim.settings.dt, np.empty((0, 3)), *kd.head, self.sim.t, kd.wave)
+        K.advance(0, self.sim.settings.dt, np.empty((0, 3)), *kd.head, self.sim.t, kd.wave, NO_RECORDING)
 
 
 def make_scheme(sim) -> TimeScheme:

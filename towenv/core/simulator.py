@@ -94,7 +94,7 @@ class SolverSettings:
 class KernelData(NamedTuple):
     """What :func:`towenv.core.kernels.advance` works on for one Simulator, by reference (not copies):
     ``Simulator.kernel_data()``. A caller that runs the kernel itself (the environments' batched stepper,
-    the recorder) calls ``kernels.advance(n, dt, tops, *kd.head, t0, kd.wave)``; on ``NEED_REMESH`` it calls
+    the recorder) calls ``kernels.advance(n, dt, tops, *kd.head, t0, kd.wave, model.NO_RECORDING)``; on ``NEED_REMESH`` it calls
     ``kd.remesh()`` and fetches ``kernel_data()`` again (the arrays are new); on a failure status
     ``kd.divergence(status, element, max_change, t_fail)`` is the exception ``advance_steps`` would raise.
     It must keep ``step_count`` itself. The tuples' layouts are the kernel's, not an API: pass them whole."""

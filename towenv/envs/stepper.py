@@ -41,6 +41,7 @@ from numba import prange
 from numba.typed import List as _TypedList
 
 from ..core import kernels as K
+from ..core.model import NO_RECORDING
 from ..core.jit import njit
 from ..core.tow_point import BLOCK, TowPointBuffer, _phase_recurrence  # noqa: F401  (re-exported)
 from .measurements import MEAS_COLUMNS, NREF, R_HALF_STROKE, R_MAXSTEPS, R_STEPS, R_TREF, R_VMAX, gather_arrays, \
@@ -62,8 +63,11 @@ def _signature(kd, sim):
     return (kd.args, kd.state, kd.work, kd.saved, kd.wave, kd.comp, kd.winch, sim.system)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count, out, res):
+    """One copy's control step: its command, ``n`` physics steps, its measurement row. Inlined into the batch
+    loop by numba (``inline="always"``): as a compiled function of its own it was one more level that links and
+    generates again the machine code of the whole step below it (towenv.core.jit.njit_internal)."""
     comp = g.comp
     winch = g.winch
     if kind == ACT_COMP_GAINS:
@@ -73,7 +77,7 @@ def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count
         comp[K.C_CMD] = u0
     elif kind == ACT_WINCH_SPEED:
         winch[K.W_VCMD] = u0
-    st, k, el, md = K.advance(n, dt, blk[off:off + n], *item[0], t0, item[1])
+    st, k, el, md = K.advance(n, dt, blk[off:off + n], *item[0], t0, item[1], item[2])
     res[0] = st
     res[1] = k
     res[2] = el
@@ -219,7 +223,7 @@ class BatchStepper:
         old = self._sig[i]
         if old is not None and len(old) == len(sig) and all(a is b for a, b in zip(old, sig)):
             return
-        item = (kd.head, kd.wave)       # kernels.advance(n, dt, tops, *head, t0, wave)
+        item = (kd.head, kd.wave, NO_RECORDING)       # kernels.advance(n, dt, tops, *head, t0, wave, rec)
         gat = gather_arrays(sim, self._body[i], self._inv_seg[i])
         self._py[i] = (item, gat)
         self._sig[i] = sig
