@@ -14,7 +14,9 @@ per control step), random actions drawn in advance, evaluation sea 4 (coastal SS
 * for comparison, Python loops over N single envs: Gymnasium ``SyncVectorEnv`` (``vectorization_mode="sync"``)
   and SB3 ``DummyVecEnv`` (``make_vec_env``), and the SB3 adapter ``TowSB3VecEnv`` over the batched env;
 * the yardstick of issue 15: Gymnasium's ``Pendulum-v1`` (unwrapped and through ``gym.make``, same steps and
-  repeats, same run), and each towenv figure's cost per env-step as a multiple of a Pendulum step.
+  repeats, same run), and each towenv figure's cost per env-step as a multiple of a Pendulum step; and the same
+  ratio from alternating runs of the two (paired: this host's speed changes for seconds at a time, so figures
+  taken minutes apart may compare different machine states).
 
     python scripts/bench_env.py                                  # about two minutes
     python scripts/bench_env.py --steps 1000 --repeats 3 --sizes 1 8
@@ -156,6 +158,33 @@ def bench_pendulum(steps, repeats):
     return {"unwrapped": _rate(run(made.unwrapped), steps, repeats), "gym.make": _rate(run(made), steps, repeats)}
 
 
+def bench_paired(env_id, steps, repeats):
+    """Per-pair CPU-time ratios (towenv step / Pendulum-v1 step), unwrapped, the two runs alternating: this host
+    switches between a fast and a slow state for seconds at a time, and figures taken minutes apart (the tables
+    above) can put the two in different states; alternating runs of ``steps`` steps each cannot."""
+    import gymnasium as gym
+    made = gym.make(env_id)
+    env = made.unwrapped
+    pend = gym.make("Pendulum-v1").unwrapped
+    acts = np.random.default_rng(0).uniform(-1, 1, (steps,) + env.action_space.shape).astype(np.float32)
+    pacts = np.random.default_rng(0).uniform(-2, 2, (steps, 1)).astype(np.float32)
+
+    def cpu(e, a, **kw):
+        e.reset(seed=0, **kw)
+        c0 = time.process_time()
+        for x in a:
+            e.step(x)
+        return time.process_time() - c0
+    cpu(env, acts, options={"eval_index": 4})
+    ratios = []
+    for _ in range(max(3, 2 * repeats)):
+        tp = cpu(pend, pacts)
+        te = cpu(env, acts, options={"eval_index": 4})
+        ratios.append(te / tp)
+    made.close()
+    return statistics.median(ratios), min(ratios), max(ratios)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=2000, help="single-env control steps per run (default 2000)")
@@ -200,11 +229,13 @@ def main(argv=None):
     print("\n## Cost per env-step relative to Gymnasium `Pendulum-v1` in the same run (goals: single ≤ 3×, batched ≤ 1×)\n")
     print(f"Pendulum-v1: unwrapped {fmt(pend['unwrapped'])}, gym.make {fmt(pend['gym.make'])} steps/s\n")
     nmax = max(args.sizes)
-    print(f"| environment | single, unwrapped | single, gym.make | batched serial N = {nmax} |")
-    print("|---|---|---|---|")
+    print(f"| environment | single, unwrapped | single, gym.make | batched serial N = {nmax} | single, unwrapped, "
+          f"alternating runs (median, min–max of per-pair ratios) |")
+    print("|---|---|---|---|---|")
     for env_id, s in singles.items():
+        pr = bench_paired(env_id, args.steps, args.repeats)
         print(f"| {env_id} | {pend['unwrapped'][0] / s['unwrapped'][0]:.2f}× | {pend['gym.make'][0] / s['gym.make'][0]:.2f}× "
-              f"| {pend['unwrapped'][0] / vecs[env_id][('batched', nmax)][0]:.2f}× |")
+              f"| {pend['unwrapped'][0] / vecs[env_id][('batched', nmax)][0]:.2f}× | {pr[0]:.2f}× ({pr[1]:.2f}–{pr[2]:.2f}) |")
     print(f"\n## Python loops over N = {args.loop_envs} single envs, for comparison (total env-steps/s)\n")
     names = list(next(iter(loops.values())))
     print("| environment | " + " | ".join(names) + " |")
