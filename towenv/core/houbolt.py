@@ -278,8 +278,10 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
             if it == 1:
                 # the tail's restoring moment at a fixed pull (its change with the stretch is in the Newton
                 # step: aft_point_influence)
+                # (axial = not merged = False, as a runtime bool: literal True/False arguments made numba compile
+                # the function once per literal)
                 aft_rotational_stiffness(b, a, c, rs, lam, node_nseg, node_segs, seg_up, tang, stretched, tens, l0,
-                                         ea, hdt2, bp[b, BP_TAIL_MASS], bkc, False)
+                                         ea, hdt2, bp[b, BP_TAIL_MASS], bkc, not merged)
             # the condensation's implicit rotation: P = diag(½Δt² k + (11Δt/12) c), ω̇* of the iterate
             iterate_omega_dot(dt, b, angs, hist_ang, dang, omg, scr[5], scr[4], tmp33b)
             for i in range(3):
@@ -315,9 +317,10 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
         # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
         for b in range(nb):
             c = body_aft_node[b]
-            if c >= 0 and tn_nseg[c] != 0:       # (relaxed coupling; the monolithic one did it above)
+            relaxed = c >= 0 and tn_nseg[c] != 0
+            if relaxed:                          # (relaxed coupling; the monolithic one did it above)
                 aft_rotational_stiffness(b, body_node[b], c, rs, blam[b], node_nseg, node_segs, seg_up, tang,
-                                         stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc, True)
+                                         stretched, tens, l0, ea, hdt2, bp[b, BP_TAIL_MASS], bkc, relaxed)
     return False
 
 
