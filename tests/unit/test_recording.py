@@ -210,3 +210,14 @@ def test_warm_up_compiles_before_the_clock_without_advancing():
     np.testing.assert_array_equal(a.top_tension, b.top_tension)
     np.testing.assert_array_equal(a.tow_point, b.tow_point)
     assert a.meta["real_time_factor"] > 0
+
+
+def test_step_phases_compile_once_per_process():
+    """Issue 15 (first use): flags computed at run time, not literal ``True``/``False``, so numba compiles each
+    phase of the Houbolt step once: a two-part tow and a series tow (aft tow point, both couplings' code paths)
+    leave one signature each (a literal-typed flag used to add a second compilation of ~3–8 s)."""
+    from towenv.core import body_dynamics, houbolt
+    towenv.Simulator("two_part_tow_1").advance(0.5)
+    towenv.Simulator("series_multitow").advance(0.5)
+    for fn in (houbolt.iterate_coefficients, houbolt.node_local_solve, body_dynamics.aft_rotational_stiffness):
+        assert len(fn.signatures) == 1, (fn.__name__, fn.signatures)

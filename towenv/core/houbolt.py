@@ -803,7 +803,7 @@ def _copy_step_state(hist_r, hist_ang, tens_hist, cstate, to_r, to_ang, to_tens,
     _copy_into(to_r.reshape(-1), hist_r.reshape(-1))
     _copy_into(to_ang.reshape(-1), hist_ang.reshape(-1))
     _copy_into(to_tens.reshape(-1), tens_hist.reshape(-1))
-    _copy_into(to_cstate.reshape(-1), cstate.reshape(-1))
+    _copy_into(to_cstate, cstate)
 
 
 @njit(cache=True, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline="always")
@@ -945,7 +945,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                 for s in range(ns):
                     tens_hist[0, s] = s_tens[0, s]
                     tens_hist[1, s] = s_tens[0, s]
-                _copy_into(cstate.reshape(-1), s_cstate.reshape(-1))
+                _copy_into(cstate, s_cstate)
                 good = True
                 for j in range(1, nsub + 1):
                     tau = j / nsub
