@@ -66,12 +66,15 @@ GAIN_KEYS = ("g_ff", "tau", "kl", "kp", "kd")
 EXTRA_SCALES = {"winch_speed": (0.0, 0.284), "last_action": (0.0, 0.320), "top_tension": (0.996, 0.178),
                 "cable_angle": (0.467, 0.0533), "fish_pitch_dev": (0.0, 0.0772), "fish_pitch_rate": (0.0, 0.190)}
 #: feature sets: name -> extra instant channels after the v1 features (before the constant)
-FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES), "v3": tuple(EXTRA_SCALES)}
+FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES), "v3": tuple(EXTRA_SCALES), "v2q": tuple(EXTRA_SCALES)}
+#: feature sets that add, before the constant, the along-cable channels 0.2–2.0 s ahead as predicted by the policy's
+#: own causal linear predictor (agents/predictor.py, stored in the policy file) from 10 s of MRU history
+PREDICTED = frozenset({"v2q"})
 #: lagged channels a feature set adds after its extra instant channels: name -> ((channel, lags in control steps),
 #: …). "v3": the policy's own earlier actions (0.2–1.1 s back: with them the residual is a recursive filter, which
 #: can shape its command to the winch's acceleration limit) and the MRU along-cable velocity 2.4–4 s back (a longer
 #: window for the predictor of the tow point's motion). Scaled as the channel's instant or v1 feature.
-LONG_HISTORY = {"v1": (), "v2": (),
+LONG_HISTORY = {"v1": (), "v2": (), "v2q": (),
                 "v3": (("last_action", (1, 2, 3, 4, 6, 8, 10)), ("tow_vel_along", (24, 28, 32, 36, 40)))}
 #: the feature set of new training runs (policy files without a ``feature_set`` entry are "v1")
 DEFAULT_FEATURE_SET = "v2"
@@ -94,6 +97,9 @@ def _require_channels(reader, feature_set: str, who: str):
 def feature_names(feature_set: str = "v1") -> list[str]:
     extra = FEATURE_SETS[_check_feature_set(feature_set)]
     long = [f"{c}@-{lag / 10:.1f}s" for c, lags in LONG_HISTORY[feature_set] for lag in lags]
+    if feature_set in PREDICTED:
+        from .predictor import feature_names as predicted_names
+        long = long + predicted_names()
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
             + list(extra) + long + ["const"])
 
@@ -127,8 +133,12 @@ class ARSPolicy:
     acts_on = "observations (and their history) + sea state"
 
     def __init__(self, theta: dict, base_table: dict, scales: dict | None = None, meta: dict | None = None,
-                 name: str = "ars", feature_set: str | None = None):
+                 name: str = "ars", feature_set: str | None = None, predictor=None):
         self.feature_set = _check_feature_set(feature_set or (meta or {}).get("feature_set", "v1"))
+        if (self.feature_set in PREDICTED) != (predictor is not None):
+            raise ValueError(f"ARSPolicy: feature set {self.feature_set!r} "
+                             + ("needs a predictor (agents/predictor.py)" if predictor is None else "has no predictor"))
+        self.predictor = predictor
         self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
         nf = n_features(self.feature_set)
         bad = [k for k, v in self.theta.items() if v.shape != (nf,)]
@@ -171,9 +181,11 @@ class ARSPolicy:
         if start or self._hist is None:
             self.base.reset()
             self._th = self.theta[nearest_key(self.theta, self.u.sea[0])]
+            self._pkey = nearest_key(self.predictor.W, self.u.sea[0]) if self.predictor is not None else None
             self._hist = None
         a_base = float(self.base.act(o)[0])
-        phi, self._hist = features_single(self.reader, o, self.scales, self._hist, self.feature_set)
+        phi, self._hist = features_single(self.reader, o, self.scales, self._hist, self.feature_set,
+                                          self.predictor, self._pkey)
         a = min(max(a_base + float(self._th @ phi), -1.0), 1.0)
         out = np.array([a], np.float32)
         return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
@@ -184,12 +196,14 @@ def _extra_single(reader, obs, name):
     return float(np.asarray(v).reshape(-1)[0])
 
 
-def features_single(reader, obs, scales, hist, feature_set: str = "v1"):
+def features_single(reader, obs, scales, hist, feature_set: str = "v1", predictor=None, pkey=None):
     """φ of one observation given the history ring ``hist`` ((3, N_HISTORY), newest first; None at episode start:
-    filled with the first observation; for a feature set with :data:`LONG_HISTORY` a pair (ring, long ring)).
+    filled with the first observation; for a feature set with :data:`LONG_HISTORY` or a predictor (:data:`PREDICTED`;
+    ``predictor`` and its sea-state key ``pkey``) a pair (ring, long or predictor ring)).
     Returns (φ, new ring). Same arithmetic as the batched :class:`_Batch`."""
     long = LONG_HISTORY[feature_set]
-    ring, lring = (hist if long and hist is not None else (hist, None))
+    pred = feature_set in PREDICTED
+    ring, lring = (hist if (long or pred) and hist is not None else (hist, None))
     h = np.array([reader(obs, c) / scales[c] for c in HISTORY_CHANNELS])
     if ring is None:
         ring = np.repeat(h[:, None], N_HISTORY, axis=1)
@@ -209,6 +223,12 @@ def features_single(reader, obs, scales, hist, feature_set: str = "v1"):
             lring[:, 0] = lh
         phi.append(np.concatenate([lring[i, list(lags)] for i, (_c, lags) in enumerate(long)]))
         ring = (ring, lring)
+    if pred:
+        from .predictor import PRED_CHANNELS, push
+        x = predictor.sample([[reader(obs, c) for c in PRED_CHANNELS]])
+        lring = push(None if lring is None else lring[None], x, lring is None)[0]
+        phi.append(predictor.predict(lring[None], [pkey])[0])
+        ring = (ring, lring)
     return np.concatenate(phi + [[1.0]]), ring
 
 
@@ -217,7 +237,11 @@ class _Batch:
     """The along-cable law (``classical.along_cable_velocity``, shared with the single-env baseline) and the
     features for a batch of observations (observation float32 → float64 × channel scale, as ``ObsReader``)."""
 
-    def __init__(self, venv, base_table: dict, scales: dict, feature_set: str = "v1"):
+    def __init__(self, venv, base_table: dict, scales: dict, feature_set: str = "v1", predictor=None):
+        if (feature_set in PREDICTED) != (predictor is not None):
+            raise ValueError(f"feature set {feature_set!r} " + ("needs a predictor (agents/predictor.py)"
+                                                                if predictor is None else "has no predictor"))
+        self.predictor = predictor
         self.reader = ObsReader(venv.envs[0])
         _require_channels(self.reader, feature_set, "ARS training")
         self.extra = FEATURE_SETS[feature_set]
@@ -239,6 +263,8 @@ class _Batch:
         from .classical import DEFAULT_ALONG_GAINS
         self.G = np.array([[float((DEFAULT_ALONG_GAINS | self.table[nearest_key(self.table, s)])[k]) for k in GAIN_KEYS]
                            for s in seas])
+        if self.predictor is not None:
+            self.pkeys = [nearest_key(self.predictor.W, s) for s in seas]
 
     def base_action(self, obs):
         from .classical import AlongCableWinch, along_cable_velocity
@@ -269,6 +295,11 @@ class _Batch:
                 self.lring[:, :, 0] = lh
             parts.append(np.concatenate([self.lring[:, i, list(lags)] for i, (_c, lags) in enumerate(self.long)],
                                         axis=1))
+        if self.predictor is not None:
+            from .predictor import PRED_CHANNELS, push
+            x = self.predictor.sample(np.stack([self.ch(obs, c) for c in PRED_CHANNELS], axis=1))
+            self.pring = push(getattr(self, "pring", None), x, first)
+            parts.append(self.predictor.predict(self.pring, self.pkeys))
         return np.concatenate(parts + [np.ones((n, 1))], axis=1)
 
 
@@ -442,7 +473,8 @@ def save_policy(policy: ARSPolicy, path: str | Path) -> Path:
         meta["long_history"] = [[c, list(lags)] for c, lags in LONG_HISTORY[fs]]
     if fs != "v1":
         meta["extra_scales"] = {c: list(EXTRA_SCALES[c]) for c in FEATURE_SETS[fs]}
-    return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta)
+    extra = policy.predictor.arrays() if policy.predictor is not None else None
+    return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta, extra)
 
 
 def load_ars_policy(path: str | Path) -> ARSPolicy:
@@ -459,7 +491,16 @@ def load_ars_policy(path: str | Path) -> ARSPolicy:
         return feature_names(fs)
     theta, table, scales, meta = read_ars_file(path, names_for, {"env_id": ENV_ID, "algo": "ars"},
                                                "an ARS along-cable-residual policy")
-    return ARSPolicy(theta, table, scales, meta, name=Path(path).stem)
+    predictor = None
+    if meta.get("feature_set") in PREDICTED:
+        from .predictor import Predictor
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                predictor = Predictor.from_arrays(z)
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"{path}: feature set {meta['feature_set']!r} but no readable predictor in the file "
+                             f"({type(exc).__name__}: {exc})") from None
+    return ARSPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 
 def default_export(feature_set: str, seed: int) -> Path:

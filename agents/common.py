@@ -115,9 +115,9 @@ def reset_copies(venv, seas, seeds):
     return obs
 
 
-def save_ars_file(path, theta: dict, base_table: dict, scales: dict, meta: dict):
+def save_ars_file(path, theta: dict, base_table: dict, scales: dict, meta: dict, extra: dict | None = None):
     """Write an ARS policy file (.npz, atomically): weights per sea-state key, the base law's gain table, the
-    feature scales and the metadata JSON. Returns the path."""
+    feature scales, the metadata JSON and ``extra`` arrays (e.g. a v2q policy's predictor). Returns the path."""
     import json
     from pathlib import Path
     from towenv.atomic import atomic_savez
@@ -126,7 +126,7 @@ def save_ars_file(path, theta: dict, base_table: dict, scales: dict, meta: dict)
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_savez(path, {"theta": np.array([theta[k] for k in keys]), "keys": np.array(keys),
                         "base_table": np.array(json.dumps(base_table)), "scales": np.array(json.dumps(scales)),
-                        "meta": np.array(json.dumps(meta))})
+                        "meta": np.array(json.dumps(meta))} | dict(extra or {}))
     return path
 
 

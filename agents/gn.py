@@ -138,16 +138,23 @@ def _cost(sh, sp, sh_ref, sp_ref, pitch_weight, fail_penalty=1.0):
 def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates: int = 1, eps: float = 0.005,
           ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, episode_seconds: float = 180.0,
           discard: float = 60.0, feature_set: str = ars.DEFAULT_FEATURE_SET, entries=None, progress: bool = True,
-          log=print, init: ars.ARSPolicy | None = None) -> ars.ARSPolicy:
+          log=print, init: ars.ARSPolicy | None = None, predictor=None) -> ars.ARSPolicy:
     """Gauss–Newton search (module docstring) from θ = 0 (the along-cable law), or from the policy ``init`` (an
     :class:`agents.ars.ARSPolicy` of any feature set: its weights are copied by feature name, features it does not
     have start at 0; its along-cable table is kept; the iterations continue its count, so the wave seeds are fresh).
     Stops after ``iterations`` more or when the next iteration would pass ``minutes`` of wall time. ``entries``:
-    indices into the evaluation (sea state, heading) list to train on (default all 12)."""
+    indices into the evaluation (sea state, heading) list to train on (default all 12). ``predictor``: the causal
+    predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default ``init``'s)."""
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import WinchPayoutVectorEnv
     from .baselines import load_tuned
     check_settings(iterations, eps, ridges, replicates, episode_seconds, discard)
+    if feature_set in ars.PREDICTED:
+        predictor = predictor if predictor is not None else getattr(init, "predictor", None)
+        if predictor is None:
+            raise ValueError(f"feature set {feature_set} needs a predictor (--predictor FILE: python -m agents.predictor)")
+    else:
+        predictor = None
     t_start = time.perf_counter()
     first = first_iteration(init, iterations)
     table = dict(init.base_table) if init is not None else dict(load_tuned().get("along_cable") or {})
@@ -162,8 +169,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     venv_j = WinchPayoutVectorEnv(num_envs=n_jac, **kw)
     venv_l = WinchPayoutVectorEnv(num_envs=n_ls, **kw)
     scales = dict(ars.FEATURE_SCALES)
-    batch_j = ars._Batch(venv_j, table, scales, feature_set)
-    batch_l = ars._Batch(venv_l, table, scales, feature_set)
+    batch_j = ars._Batch(venv_j, table, scales, feature_set, predictor)
+    batch_l = ars._Batch(venv_l, table, scales, feature_set, predictor)
     theta = initial_theta(init, keys, feature_set)
     curve = []
     log(f"[gn] seed {seed}: {C} sea states, {NF} features each; per iteration {n_ep} episodes x ({NF} + 1) for the "
@@ -245,8 +252,12 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)}",
             "curve": curve}
-    return ars.ARSPolicy({k: theta[c] for c, k in enumerate(keys)}, table, ars.FEATURE_SCALES, meta,
-                         name=f"gn_s{seed}", feature_set=feature_set)
+    out = {k: theta[c] for c, k in enumerate(keys)}
+    if init is not None:                        # sea states not trained on (``entries``) keep the initial weights
+        rest = sorted(set(init.theta) - set(keys))
+        out |= {k: row for k, row in zip(rest, initial_theta(init, rest, feature_set))}
+    return ars.ARSPolicy(out, table, ars.FEATURE_SCALES, meta,
+                         name=f"gn_s{seed}", feature_set=feature_set, predictor=predictor)
 
 
 def default_export(seed: int, feature_set: str = "v2") -> Path:
@@ -272,6 +283,11 @@ def main(argv=None) -> int:
                     help=f"feature set (agents/ars.py; default {ars.DEFAULT_FEATURE_SET})")
     ap.add_argument("--init", default=None, help="start from this ARS/GN policy file (weights copied by feature "
                                                  "name, new features at 0; a GN file's iteration count continues)")
+    ap.add_argument("--entries", type=int, nargs="+", default=None,
+                    help="indices of the evaluation (sea state, heading) list to train on (default all 12; the other "
+                         "sea states keep the --init policy's weights)")
+    ap.add_argument("--predictor", default=None, help="predictor file of feature set v2q (python -m agents.predictor; "
+                                                     "default: the --init policy's)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz, "
                                                   "gn_v3_... for feature set v3)")
     a = ap.parse_args(argv)
@@ -291,10 +307,17 @@ def main(argv=None) -> int:
             init = ars.load_ars_policy(a.init)
         except (OSError, ValueError, KeyError) as e:
             ap.error(f"--init: {e}")
+    predictor = None
+    if a.predictor:
+        from .predictor import Predictor
+        try:
+            predictor = Predictor.load(a.predictor)
+        except ValueError as e:
+            ap.error(f"--predictor: {e}")
     out = Path(a.export or default_export(a.seed, a.features))
     try:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight,
-                    feature_set=a.features, init=init)
+                    feature_set=a.features, entries=a.entries, init=init, predictor=predictor)
     except ValueError as e:
         ap.error(str(e))
     ars.save_policy(pol, out)

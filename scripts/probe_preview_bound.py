@@ -16,8 +16,16 @@ wave seeds per entry (default 1), the Gauss-Newton training seeds of ``--seed`` 
 evaluation or final seed). Evaluation: the same entries with wave seeds +0 and +100 (the selection set), RMS fish heave
 and pitch σ against ``along_cable`` per code, in one batched rollout (v2 policies run with zero preview weights).
 
-The feature set is registered at run time by patching ``agents.ars`` (its feature names, batch class and rollout) in
-this process only; nothing here changes the committed policies or their loader.
+**Causal preview: feature set "v2q"** (``agents/ars.py``, ``agents/predictor.py``): the same 30 features *predicted*
+from the past (a linear predictor per sea state from 10 s of the MRU's motion, stored in the policy file) instead of
+read from the future; the paired arm of the preview probe:
+
+    python scripts/probe_preview_bound.py train v2q --predictor agents/trained/predictor_WinchPayout-v0.npz --replicates 3 --export runs/preview/v2q_s0_r3.npz
+    python scripts/probe_preview_bound.py evaluate agents/trained/gn4_WinchPayout-v0_s0.npz runs/preview/v2q_s0_r3.npz
+
+The preview feature sets ("v2p", and "v2pq" = v2q + preview, which evaluates both kinds of policy in one batch) are
+registered at run time by patching ``agents.ars`` (its feature names, batch class and rollout) in this process only;
+nothing here changes the committed policies or their loader.
 """
 import argparse
 import contextlib
@@ -33,27 +41,31 @@ ENTRIES = tuple(range(4, 12))
 @contextlib.contextmanager
 def preview_feature_set():
     """Inside the block, feature set "v2p" exists in agents.ars: v2's features, then the 30 preview features, then
-    the constant; the batch reads the preview from a recorded along-cable run of each (sea state, wave seed).
-    Everything patched is restored on exit. Yields the patched module."""
+    the constant; the batch reads the preview from a recorded along-cable run of each (sea state, wave seed); and
+    "v2pq": v2q's features (with its predictor) and then the preview ones. Everything patched is restored on exit.
+    Yields the patched module."""
     from agents import ars
     from agents.common import reset_copies
     saved = (ars.feature_names, ars._Batch, ars.rollout_series)
-    ars.FEATURE_SETS["v2p"] = ars.FEATURE_SETS["v2"]
-    ars.LONG_HISTORY["v2p"] = ()
+    for fs in ("v2p", "v2pq"):
+        ars.FEATURE_SETS[fs] = ars.FEATURE_SETS["v2"]
+        ars.LONG_HISTORY[fs] = ()
+    ars.PREDICTED = ars.PREDICTED | {"v2pq"}
+    plain_predicted = ars.PREDICTED - {"v2pq"}
     plain_names, plain_batch, plain_rollout = ars.feature_names, ars._Batch, ars.rollout_series
 
     def feature_names(fs="v1"):
         names = plain_names(fs)
-        if fs == "v2p":
+        if fs in ("v2p", "v2pq"):
             names = names[:-1] + [f"{c}@+{lead / 10:.1f}s" for c in ars.HISTORY_CHANNELS for lead in LEADS] + ["const"]
         return names
 
     cache = {}
 
     class PreviewBatch(plain_batch):
-        def __init__(self, venv, table, scales, fs="v1"):
-            super().__init__(venv, table, scales, "v2" if fs == "v2p" else fs)
-            self.preview_on = fs == "v2p"
+        def __init__(self, venv, table, scales, fs="v1", predictor=None):
+            super().__init__(venv, table, scales, {"v2p": "v2", "v2pq": "v2q"}.get(fs, fs), predictor)
+            self.preview_on = fs in ("v2p", "v2pq")
 
         def features(self, obs, first):
             phi = super().features(obs, first)
@@ -97,7 +109,9 @@ def preview_feature_set():
         yield ars
     finally:
         ars.feature_names, ars._Batch, ars.rollout_series = saved
-        del ars.FEATURE_SETS["v2p"], ars.LONG_HISTORY["v2p"]
+        for fs in ("v2p", "v2pq"):
+            del ars.FEATURE_SETS[fs], ars.LONG_HISTORY[fs]
+        ars.PREDICTED = plain_predicted
 
 
 def evaluate(ars, files, replicates=2, episode_seconds=None):
@@ -107,16 +121,22 @@ def evaluate(ars, files, replicates=2, episode_seconds=None):
     import towenv  # noqa: F401
     from towenv.envs.vector import WinchPayoutVectorEnv
     pols = [ars.load_ars_policy(f) for f in files]
+    preds = {tuple((k, v.tobytes()) for k, v in sorted(p.predictor.W.items())): p.predictor
+             for p in pols if p.predictor is not None}
+    if len(preds) > 1:
+        raise ValueError("the v2q policies carry different predictors (evaluate them in separate runs)")
+    predictor = next(iter(preds.values()), None)
+    fs = "v2pq" if predictor is not None else "v2p"
     env = gym.make(ars.ENV_ID)
     ev = env.unwrapped.eval_sea_states()
     env.close()
     ents = [(ev[i][0], ev[i][1] + 100 * r, i) for r in range(replicates) for i in ENTRIES]
-    names = ars.feature_names("v2p")
+    names = ars.feature_names(fs)
     th = [np.zeros((len(ents), len(names)))] + [ars.theta_rows(p, [e[0] for e in ents], names) for p in pols]
     k = len(pols) + 1
     kw = {} if episode_seconds is None else {"episode_seconds": float(episode_seconds)}
     venv = WinchPayoutVectorEnv(num_envs=len(ents) * k, autoreset_mode="NextStep", batch_infos=True, **kw)
-    batch = ars._Batch(venv, pols[0].base_table, dict(ars.FEATURE_SCALES), "v2p")
+    batch = ars._Batch(venv, pols[0].base_table, dict(ars.FEATURE_SCALES), fs, predictor)
     sh, sp = ars.rollout_batch(venv, batch, [e[0] for e in ents] * k, [e[1] for e in ents] * k, np.concatenate(th))
     venv.close()
     sh, sp = sh.reshape(k, -1), sp.reshape(k, -1)
@@ -138,13 +158,14 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     t = sub.add_parser("train", help="continue the Gauss-Newton search with feature set v2 or v2p (preview)")
-    t.add_argument("features", choices=("v2", "v2p"))
+    t.add_argument("features", choices=("v2", "v2p", "v2q"))
+    t.add_argument("--predictor", default=None, help="predictor file of feature set v2q (python -m agents.predictor)")
     t.add_argument("--init", default="agents/trained/gn4_WinchPayout-v0_s0.npz", help="policy to start from")
     t.add_argument("--seed", type=int, default=0, help="training seed (its Gauss-Newton training wave seeds)")
     t.add_argument("--iterations", type=int, default=8, help="Gauss-Newton iterations (1..17 after gn4)")
     t.add_argument("--replicates", type=int, default=1, help="wave seeds per entry per iteration (1..10)")
     t.add_argument("--export", required=True, help="policy file to write")
-    e = sub.add_parser("evaluate", help="compare policy files (v1, v2 or v2p; not v3) on the evaluation set, codes 4-5")
+    e = sub.add_parser("evaluate", help="compare policy files (v1, v2, v2p or v2q; not v3) on the evaluation set, codes 4-5")
     e.add_argument("policies", nargs="+")
     e.add_argument("--replicates", type=int, default=2, help="wave seeds +0, +100, ... per entry (1..5)")
     e.add_argument("--episode-seconds", type=float, default=None, help="episode length (default: the environment's)")
@@ -160,8 +181,15 @@ def main(argv=None):
                 evaluate(ars, a.policies, a.replicates, a.episode_seconds)
                 return 0
             init = ars.load_ars_policy(a.init)
+            predictor = None
+            if a.features == "v2q":
+                from agents.predictor import Predictor
+                if a.predictor is None:
+                    ap.error("feature set v2q needs --predictor FILE (python -m agents.predictor --out FILE)")
+                predictor = Predictor.load(a.predictor)
             pol = gn.train(seed=a.seed, iterations=a.iterations, minutes=600, replicates=a.replicates,
-                           ridges=(0.01, 0.1, 1, 10, 100), feature_set=a.features, entries=list(ENTRIES), init=init)
+                           ridges=(0.01, 0.1, 1, 10, 100), feature_set=a.features, entries=list(ENTRIES), init=init,
+                           predictor=predictor)
         except (OSError, ValueError, KeyError) as exc:
             ap.error(str(exc))
         ars.save_policy(pol, a.export)

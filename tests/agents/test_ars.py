@@ -5,6 +5,7 @@ env, and scripts/evaluate.py takes the policy file."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,12 +25,18 @@ SECONDS = 30.0
 DISCARD = 10.0
 
 
+#: the committed predictor of feature set v2q (package data of the installed ``agents``)
+PREDICTOR = Path(ars.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz"
+
+
 def _policy(scale=0.02, seed=0, feature_set="v1"):
-    """An ARS policy with random (small) weights on the tuned along-cable table."""
+    """An ARS policy with random (small) weights on the tuned along-cable table (v2q: with the committed predictor)."""
+    from agents.predictor import Predictor
     table = load_tuned()["along_cable"]
     rng = np.random.default_rng(seed)
     theta = {k: rng.normal(0.0, scale, ars.n_features(feature_set)) for k in table}
-    return ars.ARSPolicy(theta, table, meta={"seed": seed, "iterations": 0}, feature_set=feature_set)
+    pred = Predictor.load(PREDICTOR) if feature_set in ars.PREDICTED else None
+    return ars.ARSPolicy(theta, table, meta={"seed": seed, "iterations": 0}, feature_set=feature_set, predictor=pred)
 
 
 @pytest.fixture(scope="module")
@@ -48,11 +55,11 @@ def test_zero_weights_are_the_along_cable_law(env):
     assert np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
 
 
-@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3"])
+@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3", "v2q"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, feature_set):
     """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off (every
     feature set: v2 adds winch speed, last action, top tension, cable angle, fish pitch and its rate; v3 the
-    policy's own earlier actions and the MRU velocity 2.4–4 s back)."""
+    policy's own earlier actions and the MRU velocity 2.4–4 s back; v2q the predicted along-cable motion)."""
     from towenv.envs.vector import WinchPayoutVectorEnv
     pol = _policy(scale=0.02, feature_set=feature_set).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
@@ -60,7 +67,7 @@ def test_single_env_policy_equals_the_batched_training_rollout(env, feature_set)
     seas = [ev[i][0] for i in picks]
     seeds = [ev[i][1] + 123456 for i in picks]
     venv = WinchPayoutVectorEnv(num_envs=3, autoreset_mode="NextStep", batch_infos=True, episode_seconds=SECONDS)
-    batch = ars._Batch(venv, pol.base_table, pol.scales, feature_set)
+    batch = ars._Batch(venv, pol.base_table, pol.scales, feature_set, pol.predictor)
     theta = np.array([pol.theta[nearest_key(pol.theta, s)] for s in seas])
     sh, sp = ars.rollout_batch(venv, batch, seas, seeds, theta, discard=DISCARD)
     venv.close()
@@ -125,11 +132,13 @@ def test_v3_long_history_features_are_the_lagged_channels(env):
         0.6 * np.sin(0.3 * 42), abs=1e-6)
 
 
-def test_policy_is_causal(env):
+@pytest.mark.parametrize("feature_set", ["v1", "v2q"])
+def test_policy_is_causal(env, feature_set):
     """The actions depend only on the observations handed to predict() (and the sea-state estimate): replaying
     a recorded observation sequence to a fresh policy bound to another environment, whose simulator is in an
-    unrelated state, gives the same actions; changing a *later* observation leaves earlier actions unchanged."""
-    pol = _policy(scale=0.05).bind_env(env)
+    unrelated state, gives the same actions; changing a *later* observation leaves earlier actions unchanged
+    (v2q: its predicted future is computed from the past only)."""
+    pol = _policy(scale=0.05, feature_set=feature_set).bind_env(env)
     sea, seed = env.unwrapped.eval_sea_states()[2]
     obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
     seq, acts = [], []
@@ -142,19 +151,19 @@ def test_policy_is_causal(env):
     other.reset(seed=seed + 1, options={"sea_state": sea, "sea_seed": seed + 1})     # same sea state, other waves
     for _ in range(17):
         other.step(np.array([0.3], np.float32))
-    replay = _policy(scale=0.05).bind_env(other)
+    replay = _policy(scale=0.05, feature_set=feature_set).bind_env(other)
     again = [replay.predict(o, episode_start=np.array([k == 0]))[0] for k, o in enumerate(seq)]
     assert all(np.array_equal(x, y) for x, y in zip(acts, again))
     changed = [o.copy() for o in seq]
     changed[40] = changed[40] + 1.0
-    replay2 = _policy(scale=0.05).bind_env(other)
+    replay2 = _policy(scale=0.05, feature_set=feature_set).bind_env(other)
     alt = [replay2.predict(o, episode_start=np.array([k == 0]))[0] for k, o in enumerate(changed)]
     assert all(np.array_equal(x, y) for x, y in zip(acts[:40], alt[:40]))
     assert not np.array_equal(acts[40], alt[40])
     other.close()
 
 
-@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3"])
+@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3", "v2q"])
 def test_policy_file_round_trip_and_refusal(tmp_path, env, feature_set):
     pol = _policy(scale=0.01, seed=3, feature_set=feature_set)
     f = ars.save_policy(pol, tmp_path / "p.npz")
@@ -164,6 +173,18 @@ def test_policy_file_round_trip_and_refusal(tmp_path, env, feature_set):
     assert all(np.array_equal(back.theta[k], pol.theta[k]) for k in pol.theta)
     assert back.base_table == json.loads(json.dumps(pol.base_table))
     assert back.meta["algo"] == "ars" and back.meta["env_id"] == WINCH
+    if feature_set in ars.PREDICTED:                # the predictor travels inside the policy file
+        assert sorted(back.predictor.W) == sorted(pol.predictor.W)
+        assert all(np.array_equal(back.predictor.W[k], pol.predictor.W[k]) for k in pol.predictor.W)
+        assert np.array_equal(back.predictor.scales, pol.predictor.scales)
+        z = {k: v for k, v in np.load(f).items() if not k.startswith("predictor_")}
+        np.savez(tmp_path / "nopred.npz", **z)
+        with pytest.raises(ValueError, match="no readable predictor"):
+            ars.load_ars_policy(tmp_path / "nopred.npz")
+        with pytest.raises(ValueError, match="needs a predictor"):
+            ars.ARSPolicy(pol.theta, pol.base_table, feature_set="v2q")
+    else:
+        assert back.predictor is None
     np.savez(tmp_path / "other.npz", x=np.zeros(3))
     with pytest.raises(ValueError, match="not an ARS policy"):
         ars.load_ars_policy(tmp_path / "other.npz")
@@ -283,3 +304,36 @@ def test_compare_script_scores_policies_against_along_cable(tmp_path, capsys):
         with pytest.raises(SystemExit) as ex:
             compare.main(bad)
         assert ex.value.code == 2
+
+
+def test_v2q_predicted_features_are_the_coming_along_cable_motion(env):
+    """The committed predictor's features are the along-cable motion 0.2–2.0 s *ahead*, from the past only: on an
+    episode none of its fitting seeds (+123456) under along_cable, the feature "c@+L s(pred)" at step k matches
+    channel c observed L s later with R² ≥ 0.9 for every channel and lead ≤ 1 s (held-out R² at fitting: ≥ 0.98),
+    and it is worse against the same channel at other leads (the lead is where it should be)."""
+    from agents.common import ObsReader
+    from agents.predictor import LEADS
+    pol = _policy(scale=0.0, feature_set="v2q")
+    reader = ObsReader(env)
+    base = make_baseline("along_cable", env)
+    sea, seed = env.unwrapped.eval_sea_states()[6]
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed + 123456})
+    base.reset()
+    key = nearest_key(pol.predictor.W, sea)
+    names = ars.feature_names("v2q")
+    hist, feats, chans = None, [], []
+    for _k in range(env.unwrapped.max_steps):
+        phi, hist = ars.features_single(reader, obs, pol.scales, hist, "v2q", pol.predictor, key)
+        feats.append(phi)
+        chans.append([reader(obs, c) / ars.FEATURE_SCALES[c] for c in ars.HISTORY_CHANNELS])
+        obs, _r, term, trunc, _i = env.step(base.act(obs))
+        if term or trunc:
+            break
+    F, X = np.array(feats), np.array(chans)
+    skip = 120                                    # past the start-up (the ring is filled with the first sample)
+    for j, c in enumerate(ars.HISTORY_CHANNELS):
+        for lead in LEADS[:5]:
+            pred = F[skip:len(F) - 30, names.index(f"{c}@+{lead / 10:.1f}s(pred)")]
+            r2 = lambda shift: 1 - np.mean((X[skip + shift:len(F) - 30 + shift, j] - pred) ** 2) / np.var(X[skip + shift:len(F) - 30 + shift, j])  # noqa: E731
+            assert r2(lead) >= 0.9, (c, lead, r2(lead))
+            assert r2(lead) > r2(lead + 6) and r2(lead) > r2(0), (c, lead)

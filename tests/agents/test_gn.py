@@ -4,6 +4,8 @@ are disjoint from every evaluation/final/tuning/validation seed and from the ARS
 with the field named, and its policy file is an ARS policy file that scripts/evaluate.py names as Gauss–Newton."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -107,6 +109,28 @@ def test_warm_start_continues_the_iteration_count_and_its_seeds(trained, monkeyp
     assert pol.meta["hyperparameters"]["init"] == trained.name and pol.meta["init_num_timesteps"] > 0
     with pytest.raises(ValueError, match="iterations"):
         gn.train(iterations=gn.MAX_ITERATIONS - 1, init=trained)
+
+
+def test_v2q_search_carries_its_predictor_and_keeps_untrained_sea_states(trained, tmp_path):
+    """A v2q search from a v2 policy on one entry: the policy carries the predictor it was given (and the file
+    does), the trained sea state's predicted-feature weights start at 0 and only it can move, the other sea states
+    keep the initial policy's weights (predicted features at 0); without a predictor it is refused."""
+    from agents.predictor import Predictor
+    from agents.common import nearest_key
+    pred = Predictor.load(Path(ars.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
+    with pytest.raises(ValueError, match="needs a predictor"):
+        gn.train(seed=3, iterations=1, entries=[4], feature_set="v2q", init=trained, progress=False)
+    pol = gn.train(seed=3, iterations=1, entries=[4], episode_seconds=62.0, discard=60.0, progress=False,
+                   feature_set="v2q", init=trained, predictor=pred)
+    assert pol.predictor is pred and pol.feature_set == "v2q" and set(pol.theta) == set(trained.theta)
+    ev = gym.make(WINCH).unwrapped.eval_sea_states()
+    moved = nearest_key(trained.theta, ev[4][0])
+    names, n2 = ars.feature_names("v2q"), ars.feature_names("v2")
+    for k, row in pol.theta.items():
+        if k != moved:
+            assert np.array_equal(row, [trained.theta[k][n2.index(nm)] if nm in n2 else 0.0 for nm in names])
+    back = ars.load_ars_policy(ars.save_policy(pol, tmp_path / "gnq.npz"))
+    assert all(np.array_equal(back.predictor.W[k], pred.W[k]) for k in pred.W)
 
 
 def test_command_line_refuses_out_of_range_arguments(capsys):

@@ -271,3 +271,20 @@ def test_continued_gauss_newton_policies_carry_their_recipe_and_act(seed):
                                                             f"gn_CompensatorGains-v0_s{seed}")
     assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
     _assert_acts_in_box_and_unlike(pol, init)
+
+
+def test_predictor_fit_seeds_are_disjoint_from_every_other_set():
+    """The WinchPayout predictor's fitting episodes (agents/predictor.py, +97000 + 10·replicate) are never an
+    evaluation, final, tuning, validation, ARS, probe, Gauss–Newton (winch or compensator) or teacher seed, value by
+    value; replicate 10 is refused."""
+    from agents import predictor
+    probe = load_script("probe_semiactive_clairvoyant")
+    base, reserved, others = _seed_sets()
+    others |= {gnc.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+               for it in range(gnc.MAX_ITERATIONS) for sd in range(3) for ls in (False, True)}
+    others |= {probe.teacher_seed(b, r) for b in base for r in range(probe.MAX_REPLICATES)}
+    mine = {predictor.predictor_seed(b, r) for b in base for r in range(predictor.MAX_REPLICATES)}
+    assert len(mine) == len(base) * predictor.MAX_REPLICATES
+    assert not mine & (reserved | others)
+    with pytest.raises(ValueError, match="replicate"):
+        predictor.predictor_seed(base[0], predictor.MAX_REPLICATES)

@@ -1,0 +1,218 @@
+"""Causal linear predictor of the tow point's along-cable motion (feature set "v2q" of ``agents/ars.py``).
+
+The WinchPayout residual policies see the MRU's along-cable velocity, acceleration and displacement over the last
+2 s. This predictor turns the last 10 s of the MRU's motion into the same three channels 0.2, 0.4, …, 2.0 s
+*ahead*: a per-sea-state linear map (ridge regression) from the history of :data:`PRED_CHANNELS` sampled every
+0.2 s (51 lags × 7 channels + a constant) to the 30 future values, scaled as the v2 features. It is fitted once,
+on episodes run under the tuned along-cable law on **predictor-fit wave seeds** ``1000·code + j + 97000 +
+10·replicate`` (disjoint from every evaluation, final, tuning, validation, training, probe and teacher seed;
+tested), and stored inside the policy file, so a "v2q" policy is a fixed causal function of its observations:
+it only reads the past (tested). The held-out R² (the last replicate left out of the fit) is in its metadata and
+printed by ``python -m agents.predictor``.
+
+    python -m agents.predictor --out agents/trained/predictor_WinchPayout-v0.npz     # ~1 min (12 entries × 6 seeds)
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["Predictor", "fit_predictor", "predictor_seed", "LEADS", "PRED_CHANNELS", "PRED_LAGS",
+           "PREDICTOR_SEED_OFFSET", "main"]
+
+#: prediction leads in control steps (0.2 … 2.0 s ahead)
+LEADS = tuple(range(2, 21, 2))
+#: channels the predictor reads (the three along-cable ones first: they are what it predicts) and its lags in
+#: control steps (0 … 10 s back, every 0.2 s)
+PRED_CHANNELS = ("tow_vel_along", "tow_acc_along", "tow_disp_along", "tow_vel_x", "tow_vel_z", "tow_acc_x", "tow_acc_z")
+PRED_LAGS = tuple(range(0, 101, 2))
+RING = max(PRED_LAGS) + 1
+#: wave seeds of the fitting episodes: base seed (1000·code + j) + 97000 + 10·replicate, replicate < 10
+PREDICTOR_SEED_OFFSET = 97000
+MAX_REPLICATES = 10
+
+
+def predictor_seed(base_seed: int, replicate: int) -> int:
+    """Wave seed of a predictor-fitting episode (module docstring); ValueError outside replicate 0..9."""
+    if not 0 <= int(replicate) < MAX_REPLICATES:
+        raise ValueError(f"replicate must be in 0..{MAX_REPLICATES - 1} (got {replicate})")
+    return int(base_seed) + PREDICTOR_SEED_OFFSET + 10 * int(replicate)
+
+
+def feature_names() -> list[str]:
+    """Names of the 30 predicted features, channel-major (as the policy's preview features)."""
+    return [f"{c}@+{lead / 10:.1f}s(pred)" for c in PRED_CHANNELS[:3] for lead in LEADS]
+
+
+class Predictor:
+    """Per-sea-state linear predictor. ``W[key]``: (len(PRED_CHANNELS)·len(PRED_LAGS) + 1, 3·len(LEADS)), keys are
+    ``agents.common.sea_key`` strings; ``scales``: each channel's scale (the history ring holds channel/scale)."""
+
+    def __init__(self, W: dict, scales, meta: dict | None = None):
+        self.W = {str(k): np.asarray(v, float) for k, v in W.items()}
+        self.scales = np.asarray(scales, float)
+        self.meta = dict(meta or {})
+        shape = (len(PRED_CHANNELS) * len(PRED_LAGS) + 1, 3 * len(LEADS))
+        bad = [k for k, v in self.W.items() if v.shape != shape]
+        if bad or self.scales.shape != (len(PRED_CHANNELS),) or not np.all(self.scales > 0):
+            raise ValueError(f"Predictor: weights of sea states {bad} are not {shape}, or the scales are not "
+                             f"{len(PRED_CHANNELS)} positive numbers")
+
+    # -------------------------------------------------------------- files (as arrays inside a policy .npz)
+    def arrays(self, prefix: str = "predictor_") -> dict:
+        keys = sorted(self.W)
+        return {prefix + "keys": np.array(keys), prefix + "W": np.array([self.W[k] for k in keys]),
+                prefix + "scales": self.scales, prefix + "meta": np.array(json.dumps(self.meta))}
+
+    @classmethod
+    def from_arrays(cls, z, prefix: str = "predictor_") -> "Predictor":
+        return cls(dict(zip([str(k) for k in z[prefix + "keys"]], z[prefix + "W"])), z[prefix + "scales"],
+                   json.loads(str(z[prefix + "meta"])))
+
+    def save(self, path) -> Path:
+        from towenv.atomic import atomic_savez
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_savez(path, self.arrays())
+        return path
+
+    @classmethod
+    def load(cls, path) -> "Predictor":
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                return cls.from_arrays(z)
+        except (OSError, KeyError, ValueError) as exc:
+            raise ValueError(f"{path}: not a predictor file ({type(exc).__name__}: {exc})") from None
+
+    # -------------------------------------------------------------- use
+    def sample(self, reader_values) -> np.ndarray:
+        """Scaled history sample from the raw channel values (…, len(PRED_CHANNELS))."""
+        return np.asarray(reader_values, float) / self.scales
+
+    @staticmethod
+    def design(ring) -> np.ndarray:
+        """(n, len(PRED_CHANNELS)·len(PRED_LAGS) + 1) regressors from rings (n, channels, RING), newest first."""
+        n = ring.shape[0]
+        return np.concatenate([ring[:, :, list(PRED_LAGS)].reshape(n, -1), np.ones((n, 1))], axis=1)
+
+    def predict(self, ring, keys) -> np.ndarray:
+        """(n, 3·len(LEADS)) predictions for history rings (n, channels, RING) of copies in sea states ``keys``
+        (keys of :attr:`W`)."""
+        X = self.design(ring)
+        out = np.zeros((X.shape[0], 3 * len(LEADS)))
+        keys = np.asarray(keys)
+        for k in np.unique(keys):
+            m = keys == k
+            out[m] = X[m] @ self.W[str(k)]
+        return out
+
+
+def push(ring, sample, first: bool):
+    """The history ring (n, channels, RING), newest first, after ``sample`` (n, channels); filled with the first
+    sample at an episode start (as the policy's 2 s ring)."""
+    if first or ring is None:
+        return np.repeat(sample[:, :, None], RING, axis=2)
+    ring = np.roll(ring, 1, axis=2)
+    ring[:, :, 0] = sample
+    return ring
+
+
+def record_channels(seas, seeds, channels, episode_seconds=None) -> np.ndarray:
+    """(T, n, len(channels)) raw channel values of each (sea state, wave seed) episode run under the tuned
+    along-cable law, one batched rollout."""
+    from towenv.envs.vector import WinchPayoutVectorEnv
+    from . import ars
+    from .baselines import load_tuned
+    from .common import reset_copies
+    kw = {} if episode_seconds is None else {"episode_seconds": float(episode_seconds)}
+    rv = WinchPayoutVectorEnv(num_envs=len(seas), autoreset_mode="NextStep", batch_infos=True, **kw)
+    obs = reset_copies(rv, list(seas), seeds)
+    rb = ars._Batch(rv, dict(load_tuned()["along_cable"]), dict(ars.FEATURE_SCALES), "v2")
+    rb.set_seas(list(seas))
+    T = rv.envs[0].max_steps
+    X = np.zeros((T, len(seas), len(channels)))
+    for k in range(T):
+        X[k] = np.stack([rb.ch(obs, c) for c in channels], axis=1)
+        obs, *_ = rv.step(rb.base_action(obs).astype(np.float32)[:, None])
+    rv.close()
+    return X
+
+
+def fit_predictor(replicates: int = 6, ridge: float = 1e-6, discard: float = 60.0, episode_seconds=None,
+                  entries=None, log=print) -> Predictor:
+    """Fit the predictor per sea state on the evaluation entries (default all 12) × ``replicates`` predictor-fit wave
+    seeds under the along-cable law; logs the held-out R² (fitted without the last replicate, tested on it), then
+    refits on all. ``ridge`` is relative to the number of samples."""
+    import gymnasium as gym
+
+    import towenv  # noqa: F401  (registers the ids)
+    from . import ars
+    from .common import sea_key
+    if not 2 <= int(replicates) <= MAX_REPLICATES:
+        raise ValueError(f"replicates must be in 2..{MAX_REPLICATES} (got {replicates})")
+    if not (math.isfinite(ridge) and ridge > 0):
+        raise ValueError(f"ridge must be a positive number (got {ridge})")
+    env = gym.make(ars.ENV_ID)
+    ev = env.unwrapped.eval_sea_states()
+    env.close()
+    idx = range(len(ev)) if entries is None else [int(i) for i in entries]
+    ents = [(ev[i][0], predictor_seed(ev[i][1], r), r) for r in range(int(replicates)) for i in idx]
+    X = record_channels([e[0] for e in ents], [e[1] for e in ents], PRED_CHANNELS, episode_seconds)
+    d0 = int(round(10 * discard))
+    if X.shape[0] - d0 < RING + max(LEADS) + 10:
+        raise ValueError(f"episode_seconds too short for a {RING / 10:g} s history after {discard:g} s")
+    scales = np.array([ars.FEATURE_SCALES[c] if c in ars.FEATURE_SCALES else float(X[d0:, :, j].std())
+                       for j, c in enumerate(PRED_CHANNELS)])
+    X = X / scales
+    t = np.arange(max(d0, RING - 1), X.shape[0] - max(LEADS))
+    ring = np.stack([X[t - lag] for lag in range(RING)], axis=3)                                   # (nt, n, ch, RING)
+    Y = np.stack([X[t + lead][:, :, :3] for lead in LEADS], axis=3).reshape(len(t), X.shape[1], -1)  # (nt, n, 3·leads)
+    keys = np.array([sea_key(e[0]) for e in ents])
+    reps = np.array([e[2] for e in ents])
+    meta = {"replicates": int(replicates), "ridge": float(ridge), "discard": float(discard),
+            "seeds": f"1000*code + j + {PREDICTOR_SEED_OFFSET} + 10*replicate", "channels": list(PRED_CHANNELS),
+            "lags": list(PRED_LAGS), "leads": list(LEADS), "r2_heldout": {}}
+
+    def stack(m):
+        cols = np.flatnonzero(m)
+        return (np.concatenate([Predictor.design(ring[:, i]) for i in cols]),
+                np.concatenate([Y[:, i] for i in cols]))
+
+    W = {}
+    for k in sorted(set(keys)):
+        A, B = stack((keys == k) & (reps < replicates - 1))
+        w = np.linalg.solve(A.T @ A + ridge * len(A) * np.eye(A.shape[1]), A.T @ B)
+        A, B = stack((keys == k) & (reps == replicates - 1))
+        r2 = (1 - ((B - A @ w) ** 2).mean(axis=0) / B.var(axis=0)).reshape(3, len(LEADS))
+        meta["r2_heldout"][k] = r2.round(4).tolist()
+        log(f"  {k}: held-out R² at +{LEADS[0] / 10:.1f} / +1.0 / +{LEADS[-1] / 10:.1f} s: "
+            + "; ".join(f"{c} {r2[j, 0]:.3f} / {r2[j, LEADS.index(10)]:.3f} / {r2[j, -1]:.3f}"
+                        for j, c in enumerate(PRED_CHANNELS[:3])))
+        A, B = stack(keys == k)
+        W[k] = np.linalg.solve(A.T @ A + ridge * len(A) * np.eye(A.shape[1]), A.T @ B)
+    return Predictor(W, scales, meta)
+
+
+def main(argv=None) -> int:
+    import argparse
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--replicates", type=int, default=6, help="wave seeds per evaluation entry (2..10; the last is "
+                                                             "held out for the printed R²)")
+    ap.add_argument("--ridge", type=float, default=1e-6, help="ridge, relative to the number of samples")
+    ap.add_argument("--episode-seconds", type=float, default=None, help="episode length (default: the environment's)")
+    ap.add_argument("--out", required=True, help="predictor file to write (.npz)")
+    a = ap.parse_args(argv)
+    try:
+        pred = fit_predictor(a.replicates, a.ridge, episode_seconds=a.episode_seconds)
+    except ValueError as exc:
+        ap.error(str(exc))
+    pred.save(a.out)
+    print(f"wrote {a.out}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
