@@ -19,6 +19,9 @@ directions, step normalised by the rewards' standard deviation). The policy::
   (committed before 2026-12-03) do not see: the winch's actual speed, the policy's own last action, top tension,
   the sheave's cable angle, fish pitch about its running mean and its rate, each as (x − offset)/scale with
   :data:`EXTRA_SCALES`;
+  ``"v2q"`` adds to v2, before the constant, the along-cable channels 0.2–2.0 s *ahead* as predicted by a causal
+  linear predictor from the last 10 s of the MRU's motion (``agents/predictor.py``; fitted on its own wave seeds
+  and stored in the policy file, :data:`PREDICTED`);
 * ``θ_c`` — one weight vector per sea state of the along-cable gain table (the same schedule as the base).
 
 θ = 0 is the along-cable law exactly. The policy is causal: it acts on the observation vector and its own

@@ -241,7 +241,9 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
             fs = meta.get("feature_set", "v1")
             more = ("" if fs == "v1" else " and the winch speed, last action, top tension, cable angle, fish pitch "
                     "and pitch rate") + (" and its own earlier actions and a longer MRU velocity history"
-                                         if fs == "v3" else "")
+                                         if fs == "v3" else "") + (
+                " and the along-cable motion 0.2-2.0 s ahead predicted from 10 s of MRU history (agents/predictor.py)"
+                if fs == "v2q" else "")
             if gn:
                 desc = "Gauss-Newton policy search (the ARS policy class)"
             desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
