@@ -36,3 +36,22 @@ def test_fit_on_short_episodes_beats_persistence_and_round_trips(tmp_path, capsy
 def test_bad_settings_are_refused_naming_the_field(kw, field):
     with pytest.raises(ValueError, match=field):
         P.fit_predictor(**({"entries": [4]} | kw))
+
+
+def test_closed_loop_script_measures_the_predictor_under_a_v2q_policy(capsys):
+    """scripts/predictor_closed_loop.py: under the committed gnq policy (its own payout, so its own cable angle) the
+    predicted along-cable motion 1 s ahead still matches what follows (R² ≥ 0.9, as under the along-cable law it was
+    fitted on: ≥ 0.98); a policy without a predictor is refused with exit 2."""
+    from pathlib import Path
+
+    from agents import ars
+    from helpers import load_script
+    script = load_script("predictor_closed_loop")
+    trained = Path(ars.__file__).parent / "trained"
+    res = script.closed_loop_r2(trained / "gnq_WinchPayout-v0_s1.npz", replicates=(9,), episode_seconds=80.0)
+    assert set(res) == {4, 5}
+    for row in res.values():
+        assert all(r1 >= 0.9 for r1, _r2 in row.values()), row
+    with pytest.raises(SystemExit) as ex:
+        script.main([str(trained / "gn5_WinchPayout-v0_s0.npz"), "--episode-seconds", "80"])
+    assert ex.value.code == 2 and "no predictor" in capsys.readouterr().err
