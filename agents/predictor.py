@@ -110,6 +110,16 @@ class Predictor:
         return out
 
 
+def shared_predictor(policies):
+    """The one predictor the v2q policies among ``policies`` carry (equal weights), None if none carries one;
+    ValueError if they carry different ones (one batch can apply only one)."""
+    found = {tuple((k, v.tobytes()) for k, v in sorted(p.predictor.W.items())): p.predictor
+             for p in policies if getattr(p, "predictor", None) is not None}
+    if len(found) > 1:
+        raise ValueError("the v2q policies carry different predictors (compare them in separate runs)")
+    return next(iter(found.values()), None)
+
+
 def push(ring, sample, first: bool):
     """The history ring (n, channels, RING), newest first, after ``sample`` (n, channels); filled with the first
     sample at an episode start (as the policy's 2 s ring)."""

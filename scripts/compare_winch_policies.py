@@ -43,11 +43,12 @@ def main(argv=None) -> int:
     n = len(ents) * (len(pols) + 1)
     kw = {} if a.episode_seconds is None else {"episode_seconds": float(a.episode_seconds)}
     venv = WinchPayoutVectorEnv(num_envs=n, autoreset_mode="NextStep", batch_infos=True, **kw)
-    preds = {tuple((k, v.tobytes()) for k, v in sorted(p.predictor.W.items())): p.predictor
-             for p in pols if p.predictor is not None}
-    if len(preds) > 1:
-        ap.error("the v2q policies carry different predictors (compare them in separate runs)")
-    batch = ars._Batch(venv, pols[0].base_table, dict(ars.FEATURE_SCALES), fs, next(iter(preds.values()), None))
+    from agents.predictor import shared_predictor
+    try:
+        predictor = shared_predictor(pols)
+    except ValueError as e:
+        ap.error(str(e))
+    batch = ars._Batch(venv, pols[0].base_table, dict(ars.FEATURE_SCALES), fs, predictor)
     sh, sp = ars.rollout_batch(venv, batch, [s for s, _ in ents] * (len(pols) + 1),
                                [s for _, s in ents] * (len(pols) + 1), np.concatenate(th))
     venv.close()

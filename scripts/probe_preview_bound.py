@@ -121,11 +121,8 @@ def evaluate(ars, files, replicates=2, episode_seconds=None):
     import towenv  # noqa: F401
     from towenv.envs.vector import WinchPayoutVectorEnv
     pols = [ars.load_ars_policy(f) for f in files]
-    preds = {tuple((k, v.tobytes()) for k, v in sorted(p.predictor.W.items())): p.predictor
-             for p in pols if p.predictor is not None}
-    if len(preds) > 1:
-        raise ValueError("the v2q policies carry different predictors (evaluate them in separate runs)")
-    predictor = next(iter(preds.values()), None)
+    from agents.predictor import shared_predictor
+    predictor = shared_predictor(pols)
     fs = "v2pq" if predictor is not None else "v2p"
     env = gym.make(ars.ENV_ID)
     ev = env.unwrapped.eval_sea_states()

@@ -55,3 +55,18 @@ def test_closed_loop_script_measures_the_predictor_under_a_v2q_policy(capsys):
     with pytest.raises(SystemExit) as ex:
         script.main([str(trained / "gn5_WinchPayout-v0_s0.npz"), "--episode-seconds", "80"])
     assert ex.value.code == 2 and "no predictor" in capsys.readouterr().err
+
+
+def test_shared_predictor_is_the_one_all_v2q_policies_carry():
+    """Policies carrying equal predictors share one (v2 policies carry none); different ones are refused."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from agents import ars
+    pred = P.Predictor.load(Path(ars.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
+    other = P.Predictor({k: w + 1e-3 for k, w in pred.W.items()}, pred.scales)
+    same = P.Predictor(dict(pred.W), pred.scales)
+    pols = [SimpleNamespace(predictor=pred), SimpleNamespace(predictor=same), SimpleNamespace(predictor=None)]
+    assert P.shared_predictor(pols) is not None and P.shared_predictor(pols[2:]) is None
+    with pytest.raises(ValueError, match="different predictors"):
+        P.shared_predictor(pols + [SimpleNamespace(predictor=other)])
