@@ -256,9 +256,8 @@ class PDFeedForwardWinch(Baseline):
 class ConstantTensionWinch(Baseline):
     """The simulator's constant-tension winch: ``sim.set_winch(mode="constant_tension", set_tension=T0)``
     at episode start, T0 = the static tension of the top segment of the winch line; payout speed =
-    gain × (T − T0) inside the winch's speed/acceleration/travel limits. The gain (m/s per N) is not
-    settable through ``Simulator.set_winch``; it is written to the simulator's winch parameter array
-    (``sim.winch[kernels.W_GAIN]``) — a Simulator-level workaround. The action is ignored."""
+    gain × (T − T0) inside the winch's speed/acceleration/travel limits (``set_winch(gain=...)``). The action
+    is ignored."""
     name = "constant_tension"
     kind = "winch"
     acts_on = "env"
@@ -275,8 +274,7 @@ class ConstantTensionWinch(Baseline):
         if self.table:
             self.gain = float(self.table[nearest_key(self.table, self.u.sea[0])]["gain"])
         seg = int(sim.winch[K.W_SEG])
-        sim.set_winch(mode="constant_tension", set_tension=float(sim.tensions[seg]))
-        sim.winch[K.W_GAIN] = self.gain
+        sim.set_winch(mode="constant_tension", set_tension=float(sim.tensions[seg]), gain=self.gain)
 
     def act(self, obs):
         return np.zeros(1)
