@@ -146,7 +146,7 @@ def test_command_line_refuses_out_of_range_arguments(capsys):
     assert str(gn.default_export(1, "v3")) == "runs/gn_v3_WinchPayout-v0_s1.npz"
 
 
-@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5", "gnq"])
+@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5", "gnq", "gnq2"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_committed_policies_ship_load_and_act(seed, family):
     """The committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed ``agents``,
@@ -154,7 +154,8 @@ def test_committed_policies_ship_load_and_act(seed, family):
     from the ``gn`` file of the same seed; ``gn3``/``gn4``: 8 more each, three replicates, continued from ``gn2``/``gn3``;
     ``gn5``: 7 more (its time budget stopped it), three replicates, from ``gn4``; feature set
     v2, the along-cable table's sea states; ``gnq``: 4 more from ``gn5`` (budget) with feature set v2q and the
-    committed predictor, on codes 4-5 only — code 3 keeps ``gn5``'s weights, predicted features at 0) and act:
+    committed predictor, on codes 4-5 only — code 3 keeps ``gn5``'s weights, predicted features at 0; ``gnq2``: 5 more
+    from ``gnq`` (budget), the same settings, code 3 still ``gnq``'s weights) and act:
     inside the action box and not the along-cable law itself."""
     from pathlib import Path
 
@@ -168,12 +169,14 @@ def test_committed_policies_ship_load_and_act(seed, family):
     else:
         hp = pol.meta["hyperparameters"]
         first, its, parent, reps = {"gn2": (10, 6, "gn", 2), "gn3": (16, 8, "gn2", 3), "gn4": (24, 8, "gn3", 3),
-                                    "gn5": (32, 7, "gn4", 3), "gnq": (39, 4, "gn5", 3)}[family]
+                                    "gn5": (32, 7, "gn4", 3), "gnq": (39, 4, "gn5", 3),
+                                    "gnq2": (43, 5, "gnq", 3)}[family]
         assert (pol.meta["first_iteration"], pol.meta["iterations"]) == (first, its)
         assert hp["init"] == f"{parent}_WinchPayout-v0_s{seed}" and hp["replicates"] == reps
         assert hp["ridges"] == [0.01, 0.1, 1.0, 10.0, 100.0]
-    assert pol.feature_set == ("v2q" if family == "gnq" else "v2") and set(pol.theta) == set(load_tuned()["along_cable"])
-    if family == "gnq":
+    assert pol.feature_set == ("v2q" if family in ("gnq", "gnq2") else "v2")
+    assert set(pol.theta) == set(load_tuned()["along_cable"])
+    if family in ("gnq", "gnq2"):
         from agents.predictor import Predictor
         pred = Predictor.load(Path(agents.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
         assert all(np.array_equal(pol.predictor.W[k], pred.W[k]) for k in pred.W)
@@ -181,6 +184,7 @@ def test_committed_policies_ship_load_and_act(seed, family):
         names, n2 = ars.feature_names("v2q"), ars.feature_names("v2")
         code3 = "hs0.88_tp4.03"
         assert np.array_equal(pol.theta[code3], [parent.theta[code3][n2.index(nm)] if nm in n2 else 0.0 for nm in names])
+        assert pol.meta["hyperparameters"]["entries"] == [4, 5, 6, 7, 8, 9, 10, 11]
     env = gym.make(WINCH, episode_seconds=20.0)
     pol.bind_env(env)
     sea, s = env.unwrapped.eval_sea_states()[9]
