@@ -29,6 +29,7 @@ def closed_loop_r2(policy_file, replicates=(7, 8), episode_seconds=None, discard
     ev = env.unwrapped.eval_sea_states()
     env.close()
     ents = [(ev[i][0], predictor_seed(ev[i][1], r)) for r in replicates for i in range(4, 12)]
+    codes = np.array([4 if i < 8 else 5 for _r in replicates for i in range(4, 12)])   # entries 4-7: code 4, 8-11: code 5
     seas = [e[0] for e in ents]
     kw = {} if episode_seconds is None else {"episode_seconds": float(episode_seconds)}
     venv = WinchPayoutVectorEnv(num_envs=len(ents), autoreset_mode="NextStep", batch_infos=True, **kw)
@@ -48,7 +49,6 @@ def closed_loop_r2(policy_file, replicates=(7, 8), episode_seconds=None, discard
         a = np.clip(batch.base_action(obs) + np.einsum("nf,nf->n", theta, phi), -1.0, 1.0)
         obs, *_ = venv.step(a.astype(np.float32)[:, None])
     venv.close()
-    codes = np.array([4 if s.hs < 2.5 else 5 for s in seas])
     t = np.arange(int(round(10 * discard)), T - max(LEADS))
     out = {}
     for c in (4, 5):

@@ -192,3 +192,36 @@ def test_committed_policies_ship_load_and_act(seed, family):
     b = rollout(env, make_baseline("along_cable", env), sea, s + 123456)
     assert np.all(np.abs(a.data["winch_speed"]) <= env.unwrapped.winch_max_speed + 1e-9)
     assert not np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
+
+
+def test_training_cost_follows_the_init_chain(tmp_path, capsys):
+    """scripts/training_cost.py sums each file's own iteration seconds and env steps along its --init chain: the
+    committed gnq2 chain is gn → gn2 → gn3 → gn4 → gn5 → gnq → gnq2 and its totals are the sums of the files' own
+    metadata; a file whose init is missing, and a file that is no policy, are refused with exit 2 naming them."""
+    import json
+    import shutil
+    from pathlib import Path
+
+    import agents
+    from helpers import load_script
+    tc = load_script("training_cost")
+    trained = Path(agents.__file__).parent / "trained"
+    runs = tc.chain(trained / "gnq2_WinchPayout-v0_s1.npz")
+    assert [r[0] for r in runs] == [f"{f}_WinchPayout-v0_s1" for f in ("gn", "gn2", "gn3", "gn4", "gn5", "gnq", "gnq2")]
+    for stem, sec, steps in runs:
+        meta = tc.read_meta(trained / f"{stem}.npz")
+        assert steps == meta["num_timesteps"] > 0
+        assert sec == pytest.approx(sum(c["seconds"] for c in meta["curve"])) and 0 < sec <= meta["wall_seconds"]
+    # a parent's own steps are what its child records as init_num_timesteps (the totals do not double count)
+    for (_p, _s, n_parent), (child, _c, _n) in zip(runs, runs[1:]):
+        assert tc.read_meta(trained / f"{child}.npz")["init_num_timesteps"] == n_parent
+    assert tc.main([str(trained / "gnq2_WinchPayout-v0_s1.npz")]) == 0
+    assert "chain" in capsys.readouterr().out
+    lone = tmp_path / "gnq2_WinchPayout-v0_s1.npz"
+    shutil.copy(trained / "gnq2_WinchPayout-v0_s1.npz", lone)
+    bad = tmp_path / "not_a_policy.npz"
+    bad.write_text(json.dumps({"x": 1}))
+    for f, msg in ((lone, "--init"), (bad, "not_a_policy")):
+        with pytest.raises(SystemExit) as ex:
+            tc.main([str(f)])
+        assert ex.value.code == 2 and msg in capsys.readouterr().err

@@ -1,0 +1,69 @@
+"""Training cost of committed ARS / Gauss–Newton policy files, following each file's ``--init`` chain (issue 14's
+"≤ 1 h wall per seed" recipe goal). For every file: its own wall time (the sum of ``meta["curve"][*]["seconds"]``,
+the time of its iterations) and env steps, and the totals of the whole chain it continues (the ``init`` named in its
+hyperparameters, looked up next to it):
+
+    python scripts/training_cost.py agents/trained/gnq2_WinchPayout-v0_s{0,1,2}.npz agents/trained/gn_CompensatorGains-v0_s{0,1,2}.npz
+
+The wall times are what the runs took as they were run (three seeds side by side on two cores here), not CPU time.
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+
+def read_meta(path) -> dict:
+    """The metadata of an ARS / Gauss–Newton policy file; ValueError naming the file if it has none."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return json.loads(str(z["meta"]))
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"{path}: not an ARS / Gauss-Newton policy file with metadata ({exc})") from None
+
+
+def own_cost(meta) -> tuple[float, int]:
+    """(wall seconds of the file's own iterations, its own env steps)."""
+    curve = meta.get("curve") or []
+    seconds = float(sum(float(c.get("seconds", 0.0)) for c in curve if isinstance(c, dict)))
+    return seconds, int(meta.get("num_timesteps", 0))
+
+
+def chain(path) -> list[tuple[str, float, int]]:
+    """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path``."""
+    out, seen, path = [], set(), Path(path)
+    while True:
+        if path.stem in seen:
+            raise ValueError(f"{path}: its --init chain loops back to {path.stem}")
+        seen.add(path.stem)
+        meta = read_meta(path)
+        out.append((path.stem, *own_cost(meta)))
+        init = (meta.get("hyperparameters") or {}).get("init")
+        if not init:
+            return out[::-1]
+        nxt = path.parent / f"{Path(init).stem}.npz"
+        if not nxt.exists():
+            raise ValueError(f"{path}: its --init {init!r} is not next to it ({nxt})")
+        path = nxt
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("policies", nargs="+", help="ARS / Gauss-Newton policy files (.npz)")
+    a = ap.parse_args(argv)
+    for p in a.policies:
+        try:
+            runs = chain(p)
+        except ValueError as exc:
+            ap.error(str(exc))
+        total_s, total_n = sum(r[1] for r in runs), sum(r[2] for r in runs)
+        parts = " + ".join(f"{stem} {s / 60:.1f} min" for stem, s, _n in runs)
+        print(f"{Path(p).stem}: chain {total_s / 60:.1f} min wall, {total_n / 1e6:.1f} M env steps ({parts})", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
