@@ -37,3 +37,32 @@ def test_set_sea_uses_the_new_sea():
     after = sim._tow_points(1, 200)
     exact = sim.path.position((1 + np.arange(200)) * sim.dt)
     assert np.abs(after - exact).max() < 1e-9 and np.abs(after - before).max() > 1e-3
+
+
+def test_one_aligned_block_with_its_mean_track_equals_the_general_path():
+    """The stepper's refill (one aligned block with its mean track, issue 15's cheaper refill) gives the numbers
+    of the general chunked path bit for bit; and ``mean_path`` on one piece equals its per-piece evaluation."""
+    from towenv.core.tow_point import BLOCK
+    sim = towenv.Simulator("two_part_coastal_ss4")
+    dt = sim.dt
+    for first, count in ((0, BLOCK), (5 * BLOCK, BLOCK), (7 * BLOCK, 40)):
+        tp = TowPointBuffer(sim)
+        pos, mean = tp.block(first, count, mean=True)
+        np.testing.assert_array_equal(pos, tp._aligned(first, count))
+        t = np.arange(first, first + count) * dt
+        x, psi, _ = sim.path.mean_path(t)
+        np.testing.assert_array_equal(mean, np.column_stack([x, psi]))
+        # the general path (not aligned: chunk by chunk) for the same steps
+        np.testing.assert_array_equal(tp.block(first + 1, count - 1), pos[1:])
+    # mean_path across two pieces of a manoeuvre (masked per piece) equals it on each piece alone
+    turn = towenv.Simulator("ablow_turn_1km")
+    path = turn.path
+    assert len(path.pieces) > 1
+    t0 = path.pieces[1].t0
+    t = np.linspace(t0 - 5.0, t0 + 5.0, 41)
+    both = path.mean_path(t)
+    lo, hi = t < t0, t >= t0
+    for part in (lo, hi):
+        one = path.mean_path(t[part])
+        for a, b in zip(both, one):
+            np.testing.assert_array_equal(a[part], b)

@@ -82,6 +82,14 @@ class TowPointBuffer:
         """Positions (count, 3) of steps first … first+count−1. The phase recurrence restarts from an exact
         evaluation at every multiple of BLOCK, so a step's value does not depend on ``first``/``count``.
         With ``mean=True`` also the mean track (count, 4): x, y, z and heading (rad) of the same steps."""
+        if first % BLOCK == 0 and 0 < count <= BLOCK:
+            # one aligned block (the stepper's refills): its mean track is the one _aligned evaluates, at the
+            # same times (first == the block's anchor)
+            out, mp = self._aligned(first, count, with_mean=True)
+            if not mean:
+                return out
+            x, psi, _ = mp
+            return out, np.column_stack([x, psi])
         out = np.empty((count, 3))
         s = first
         while s < first + count:
@@ -94,17 +102,20 @@ class TowPointBuffer:
         x, psi, _ = self.path.mean_path(t)
         return out, np.column_stack([x, psi])
 
-    def _aligned(self, first, count):
-        """Steps first … first+count−1 inside one aligned block (anchor = the block's first step)."""
+    def _aligned(self, first, count, with_mean=False):
+        """Steps first … first+count−1 inside one aligned block (anchor = the block's first step); with
+        ``with_mean`` also the mean track ``path.mean_path`` of those steps' times."""
         dt = self.sim.settings.dt
         a = (first // BLOCK) * BLOCK
         t = (a + np.arange(first - a + count)) * dt
         lin = self._linear(float(t[0]), float(t[-1]))
         t = t[first - a:]
         if lin is None:
-            return self.path.position(t)
+            pos = self.path.position(t)
+            return (pos, self.path.mean_path(t)) if with_mean else pos
         E, (rr, ri, gr, gi) = lin
         osc = np.empty((first - a + count, 3))
         _phase_recurrence(E.real.copy(), E.imag.copy(), rr, ri, gr, gi, osc)
-        x, _, _ = self.path.mean_path(t)
-        return x + osc[first - a:] * self.path.ramp(t)[:, None]
+        mp = self.path.mean_path(t)
+        pos = mp[0] + osc[first - a:] * self.path.ramp(t)[:, None]
+        return (pos, mp) if with_mean else pos
