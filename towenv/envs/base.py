@@ -543,7 +543,10 @@ class TowEnv(gym.Env):
         rows = self._rows
         i = self._row
         rows.actions[i] = action                        # a copy (float64): the caller's array is kept
-        res = step_copies([self], rows, np.array([i]))
+        idx = self.__dict__.get("_idx")
+        if idx is None or idx[0] != i:                  # this copy's row, as the index array step_copies takes
+            idx = self._idx = np.array([i])
+        res = step_copies([self], rows, idx)
         obs, reward, terminated, truncated = res.obs[0], float(res.rewards[0]), bool(res.terminated[0]), \
             bool(res.truncated[0])
         info = res.info(0)
@@ -757,13 +760,14 @@ class StepResult:
         """The single-environment ``info`` dict of row position k."""
         e = self.envs[k]
         i = self.idx[k]
-        M = self.rows.stepper.M[i]
+        row = self.rows.stepper.M[i].tolist()      # Python floats, as float(M[i, c]) gives; one numpy call
+        t, heave, pitch, top, hits, min_t = (row[MS.M_T], row[MS.M_HEAVE], row[MS.M_PITCH], row[MS.M_TOP_T],
+                                             row[MS.M_HITS], row[MS.M_MIN_T])
         comps = dict(zip(self.names, self.comps[k].tolist())) if self.names is not None else self.comps[k]
         if k in self.terminal_costs:
             comps["terminal"] = self.terminal_costs[k]
-        info = {"t": float(M[MS.M_T]), "reward_components": comps, "fish_heave": float(M[MS.M_HEAVE]),
-                "fish_pitch": float(M[MS.M_PITCH]), "top_tension": float(M[MS.M_TOP_T]),
-                "end_stop_hits": int(M[MS.M_HITS]), "slack": bool(M[MS.M_MIN_T] <= e._slack())}
+        info = {"t": t, "reward_components": comps, "fish_heave": heave, "fish_pitch": pitch, "top_tension": top,
+                "end_stop_hits": int(hits), "slack": bool(min_t <= e._slack())}
         if k in self.reasons:
             info["termination"] = self.reasons[k]
         f = self.failures.get(int(i))
