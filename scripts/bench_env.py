@@ -5,7 +5,10 @@ per control step), random actions drawn in advance, evaluation sea 4 (coastal SS
 
 * single env steps/s, unwrapped and through ``gym.make`` (Gymnasium's checker/order wrappers) — median of
   ``--repeats`` runs of ``--steps`` steps, by process CPU time (min–max and the wall-clock median too);
-* the compiled physics alone: the batch kernel for one copy with the same commands, no Python around it;
+* the compiled step alone: the batch kernel for one copy with the same commands, one control step per call, no
+  Python around it but the stepper's; and the physics alone, the zero-overhead bound: the same kernel advancing
+  ``PHYSICS_CALL_STEPS`` control steps' worth of physics per call (per-call costs spread over them), and where a
+  single env step's time goes (physics, per-call compiled costs, Python);
 * reset time: ``env.reset(seed=i)`` with a new random sea each time (sea synthesis, ``Simulator.reset``,
   the first tow-point block, the first observation) — median of 200;
 * the batched vector env (``gym.make_vec(..., vectorization_mode="vector_entry_point")``, one numba call per
@@ -36,6 +39,11 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("NUMBA_NUM_THREADS", str(os.cpu_count() or 1))
 
 import numpy as np  # noqa: E402
+
+
+#: control steps' worth of physics per compiled call in the zero-overhead bound (``physics alone``): the per-call
+#: costs (dispatch, measurement row, tow-point refills, Python) spread over this many control steps
+PHYSICS_CALL_STEPS = 32
 
 
 def _rate(fn, n, repeats):
@@ -71,6 +79,14 @@ def bench_single(env_id, steps, repeats):
         for _ in range(steps):
             st.step(env.substeps, env.ACT_KIND)
     out["kernel"] = _rate(kernel_only, steps, repeats)
+    per_call = PHYSICS_CALL_STEPS * env.substeps          # physics steps per call of the zero-overhead bound
+    calls = max(1, steps // PHYSICS_CALL_STEPS)
+
+    def physics_only():
+        env.reset(seed=0, options={"eval_index": 4})
+        for _ in range(calls):
+            st.step(per_call, env.ACT_KIND)
+    out["physics"] = _rate(physics_only, calls * PHYSICS_CALL_STEPS, repeats)
     ts = []
     for i in range(200):
         t0 = time.process_time()
@@ -175,14 +191,31 @@ def bench_paired(env_id, steps, repeats):
         for x in a:
             e.step(x)
         return time.process_time() - c0
+    st = env._rows.stepper
+    per_call = PHYSICS_CALL_STEPS * env.substeps
+    calls = max(1, steps // PHYSICS_CALL_STEPS)
+
+    def cpu_kernel(n, k):
+        env.reset(seed=0, options={"eval_index": 4})
+        c0 = time.process_time()
+        for _ in range(k):
+            st.step(n, env.ACT_KIND)
+        return time.process_time() - c0
     cpu(env, acts, options={"eval_index": 4})
-    ratios = []
+    ratios, parts = [], []
     for _ in range(max(3, 2 * repeats)):
-        tp = cpu(pend, pacts)
-        te = cpu(env, acts, options={"eval_index": 4})
+        tp = cpu(pend, pacts) / steps
+        te = cpu(env, acts, options={"eval_index": 4}) / steps
+        tk = cpu_kernel(env.substeps, steps) / steps
+        tph = cpu_kernel(per_call, calls) / (calls * PHYSICS_CALL_STEPS)
         ratios.append(te / tp)
+        parts.append((te / tp, tph / tp, (tk - tph) / tp, (te - tk) / tp, 1e6 * te, 1e6 * tph, 1e6 * (tk - tph),
+                      1e6 * (te - tk)))
     made.close()
-    return statistics.median(ratios), min(ratios), max(ratios)
+    # per-pair figures: [env step, physics alone, per-call compiled costs, Python] as multiples of the pair's
+    # Pendulum step, then the same in µs; medians over the pairs
+    med = [statistics.median(p[j] for p in parts) for j in range(8)]
+    return statistics.median(ratios), min(ratios), max(ratios), med
 
 
 def main(argv=None):
@@ -209,12 +242,20 @@ def main(argv=None):
         vecs[env_id] = bench_vector(env_id, args.sizes, args.vector_steps, max(3, args.repeats // 2), args.threads)
         loops[env_id] = bench_loops(env_id, args.loop_envs, args.vector_steps, max(3, args.repeats // 2))
     print("## Single environment (env steps/s; one core)\n")
-    print("| environment | unwrapped | gym.make | compiled step alone (kernel + gather) | reset (ms) | "
-          "Simulator.reset (µs) |")
-    print("|---|---|---|---|---|---|")
+    print("| environment | unwrapped | gym.make | compiled step alone (kernel + gather) | physics alone "
+          f"({PHYSICS_CALL_STEPS} control steps per call) | reset (ms) | Simulator.reset (µs) |")
+    print("|---|---|---|---|---|---|---|")
     for env_id, s in singles.items():
-        print(f"| {env_id} | {fmt(s['unwrapped'])} | {fmt(s['gym.make'])} | {fmt(s['kernel'])} | "
+        print(f"| {env_id} | {fmt(s['unwrapped'])} | {fmt(s['gym.make'])} | {fmt(s['kernel'])} | {fmt(s['physics'])} | "
               f"{s['reset_ms']:.2f} | {s['reset_sim_us']:.1f} |")
+    print("\nWhere a single (unwrapped) env step goes, µs of CPU (medians above): physics of the control step "
+          "(the bound: physics alone) + per-call costs of the compiled step (kernel + gather − physics alone) + "
+          "Python around it (unwrapped − kernel + gather)\n")
+    print("| environment | env step | physics | per-call compiled step costs | Python around it |")
+    print("|---|---|---|---|---|")
+    for env_id, s in singles.items():
+        e, k, ph = (1e6 / s[key][0] for key in ("unwrapped", "kernel", "physics"))
+        print(f"| {env_id} | {e:.1f} | {ph:.1f} | {k - ph:.1f} | {e - k:.1f} |")
     print("\n## Batched vector env, `vector_entry_point` (total env-steps/s)\n")
     heads = [f"N = {n}" for n in args.sizes]
     print("| environment | mode | " + " | ".join(heads) + " |")
@@ -230,12 +271,23 @@ def main(argv=None):
     print(f"Pendulum-v1: unwrapped {fmt(pend['unwrapped'])}, gym.make {fmt(pend['gym.make'])} steps/s\n")
     nmax = max(args.sizes)
     print(f"| environment | single, unwrapped | single, gym.make | batched serial N = {nmax} | single, unwrapped, "
-          f"alternating runs (median, min–max of per-pair ratios) |")
-    print("|---|---|---|---|---|")
+          f"alternating runs (median, min–max of per-pair ratios) | physics alone, alternating (zero-overhead bound) |")
+    print("|---|---|---|---|---|---|")
+    paired = {}
     for env_id, s in singles.items():
         pr = bench_paired(env_id, args.steps, args.repeats)
+        paired[env_id] = pr[3]
         print(f"| {env_id} | {pend['unwrapped'][0] / s['unwrapped'][0]:.2f}× | {pend['gym.make'][0] / s['gym.make'][0]:.2f}× "
-              f"| {pend['unwrapped'][0] / vecs[env_id][('batched', nmax)][0]:.2f}× | {pr[0]:.2f}× ({pr[1]:.2f}–{pr[2]:.2f}) |")
+              f"| {pend['unwrapped'][0] / vecs[env_id][('batched', nmax)][0]:.2f}× | {pr[0]:.2f}× ({pr[1]:.2f}–{pr[2]:.2f}) "
+              f"| {pr[3][1]:.2f}× |")
+    print("\nThe single env step in the alternating runs, split as above (median over the pairs of each part's CPU "
+          "time, in µs and as a multiple of the pair's Pendulum-v1 step; the parts need not add up to the median "
+          "total):\n")
+    print("| environment | env step | physics alone | per-call compiled step costs | Python around it |")
+    print("|---|---|---|---|---|")
+    for env_id, m in paired.items():
+        print(f"| {env_id} | {m[4]:.1f} µs ({m[0]:.2f}×) | {m[5]:.1f} µs ({m[1]:.2f}×) | {m[6]:.1f} µs ({m[2]:.2f}×) "
+              f"| {m[7]:.1f} µs ({m[3]:.2f}×) |")
     print(f"\n## Python loops over N = {args.loop_envs} single envs, for comparison (total env-steps/s)\n")
     names = list(next(iter(loops.values())))
     print("| environment | " + " | ".join(names) + " |")
