@@ -38,3 +38,35 @@ def test_entry_point_is_not_pickled_and_is_found_again():
     assert env2._rows.stepper._entry is None
     env2.step(np.zeros(1))
     assert env2._rows.stepper._entry is not None
+
+
+def test_fused_observation_reward_flags_equal_the_pieces_own_calls():
+    """With the standard pieces, observation, reward and flags are one compiled call; an Observer subclass that
+    overrides ``measure_rows`` (here: calls the parent) takes the pieces' own calls. Same numbers, noise and
+    delay included."""
+    from towenv.envs.base import step_copies  # noqa: F401  (the path under test)
+    from towenv.envs.pieces import Observer
+
+    class Own(Observer):
+        def measure_rows(self, *a, **k):
+            return super().measure_rows(*a, **k)
+
+    base = gym.make("towenv/CompensatorGains-v0").unwrapped.observer
+
+    def run(cls):
+        obs_fn = cls(base.names, noise={base.names[0]: 0.05}, delay=1, action_dim=base.action_dim)
+        env = gym.make("towenv/CompensatorGains-v0", episode_seconds=8.0, observation_fn=obs_fn).unwrapped
+        obs, _ = env.reset(seed=9)
+        out = [obs.astype(float)]
+        for a in np.random.default_rng(2).uniform(-1, 1, (60, 2)):
+            obs, r, te, tr, info = env.step(a)
+            out.append(np.concatenate([obs.astype(float), [r, float(te), float(tr)],
+                                       list(info["reward_components"].values())]))
+            if te or tr:
+                break
+        return out
+
+    fused, own = run(Observer), run(Own)
+    assert len(fused) == len(own) > 10
+    for a, b in zip(fused, own):
+        np.testing.assert_array_equal(a, b)

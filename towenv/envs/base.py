@@ -27,7 +27,8 @@ from ..sea.spectra import _CONVENTIONS as SEA_CONVENTIONS
 from . import checks as C
 from . import measurements as MS
 from . import stepper as ST
-from .pieces import (CHANNELS, LIMIT_OPS, HeavePitchReward, Limit, Observer, PartedOrGrounded, RandomCodeSeas,
+from .pieces import (CHANNELS, HEAVE_RATE_LIMIT, LIMIT_OPS, PITCH_RATE_LIMIT, HeavePitchReward, Limit, Observer,
+                     PartedOrGrounded, RandomCodeSeas, _heave_pitch_rows, _NO_PREVIEW, _observe_rows,
                      default_eval_sea_states)
 
 __all__ = ["TowEnv", "DEFAULT_BREAKING_LOAD", "EnvRows", "RESET_OPTIONS", "MAX_OBS_DELAY"]
@@ -797,6 +798,28 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
     M = st.M
     P = e0._preview_rows(idx) if e0._wants_preview else None
     obs_fn = e0.observer
+    rew_fn = e0.reward_fn
+    lim = e0._limits                                # compiled limits of the termination piece, or None
+    if (lim is not None and getattr(type(obs_fn), "measure_rows", None) is _MEASURE_ROWS
+            and getattr(type(rew_fn), "batch", None) is _REWARD_BATCH):
+        # the standard pieces: observation, reward and flags in one compiled call (the same arithmetic as
+        # Observer.measure_rows, HeavePitchReward.batch and _post_rows, in that order)
+        n = len(idx)
+        noise, noisy = obs_fn.noise_rows([e.np_random for e in envs] if obs_fn._noisy else None, n)
+        O = np.empty((n, obs_fn.size), np.float32)
+        R = np.empty(n)
+        C = np.empty((n, len(rew_fn.COMPONENTS)))
+        term = np.empty(n, bool)
+        trunc = np.empty(n, bool)
+        nterm = _observe_reward_flags(M, A, rows.prev_action, _NO_PREVIEW if P is None else P, idx,
+                                      *obs_fn.rows_arrays(), noise, noisy, O, rew_fn.weight_vector(),
+                                      rew_fn.slack_tension, rew_fn.over_tension_fraction, C, R, *lim, refs, term,
+                                      trunc)
+        if obs_fn.delay:
+            for k, e in enumerate(envs):
+                O[k] = e.observer.push(O[k])
+        return _finish(envs, rows, idx, M, A, P, refs, O, R, C, rew_fn.COMPONENTS, lim, term, trunc, nterm,
+                       failures)
     if hasattr(obs_fn, "measure_rows"):
         rngs = [e.np_random for e in envs] if obs_fn._noisy else None
         O = obs_fn.measure_rows(M, A, idx, rngs, P)
@@ -806,7 +829,6 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
     else:
         O = np.stack([e.observer(e._row_dict(M[i], A[i], None if P is None else P[i]), e.np_random)
                       for e, i in zip(envs, idx)])
-    rew_fn = e0.reward_fn
     if hasattr(rew_fn, "batch"):
         R, C = rew_fn.batch(M, A, rows.prev_action, idx)
         names = rew_fn.COMPONENTS
@@ -821,8 +843,12 @@ def step_copies(envs, rows: EnvRows, idx: np.ndarray) -> StepResult:
         names = None
     term = np.empty(len(idx), bool)
     trunc = np.empty(len(idx), bool)
-    lim = e0._limits                                # compiled limits of the termination piece, or None
     nterm = _post_rows(M, refs, A, rows.prev_action, idx, *(lim if lim is not None else _NO_LIMITS), R, term, trunc)
+    return _finish(envs, rows, idx, M, A, P, refs, O, R, C, names, lim, term, trunc, nterm, failures)
+
+
+def _finish(envs, rows, idx, M, A, P, refs, O, R, C, names, lim, term, trunc, nterm, failures) -> StepResult:
+    """The rest of :func:`step_copies`: termination reasons and terminal costs, failures, the result."""
     reasons, tcs = {}, {}
     if lim is None:                                 # a piece without limits: asked for every copy
         for k, (e, i) in enumerate(zip(envs, idx)):
@@ -883,6 +909,21 @@ def _limit_reason(piece, m) -> str:
         if x.met(float(m[x.key])):
             return f"{x.reason}: {x.key} = {float(m[x.key]):g} {x.op} {x.value:g}"
     return type(piece).__name__
+
+
+_MEASURE_ROWS = Observer.measure_rows
+_REWARD_BATCH = HeavePitchReward.batch
+
+
+@njit(cache=True)
+def _observe_reward_flags(M, A, PA, P, idx, okind, oidx, oscale, ostd, olo, ohi, noise, noisy, O, wv, slack, frac, C,
+                          R, lcol, lop, lval, refs, term, trunc):
+    """Observation rows (``pieces._observe_rows``), rewards (``pieces._heave_pitch_rows``) and flags
+    (:func:`_post_rows`) of rows ``idx`` in one compiled call: one dispatch instead of three. Returns the number
+    of terminated rows."""
+    _observe_rows(M, A, P, idx, okind, oidx, oscale, ostd, noise, noisy, olo, ohi, O)
+    _heave_pitch_rows(M, A, PA, idx, wv, slack, frac, HEAVE_RATE_LIMIT, PITCH_RATE_LIMIT, C, R)
+    return _post_rows(M, refs, A, PA, idx, lcol, lop, lval, R, term, trunc)
 
 
 @njit(cache=True)

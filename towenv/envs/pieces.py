@@ -232,19 +232,28 @@ class Observer:
         """Undelayed observations (len(rows), size) float32 of measurement rows ``M[rows]`` (columns
         :data:`~towenv.envs.measurements.MEAS_COLUMNS`) with actions ``A[rows]`` — the compiled, batched form of
         :meth:`measure` (same scaling, noise, NaN handling and clipping). ``rngs[i]`` draws row i's noise."""
-        noisy = self._noisy and rngs is not None
-        if noisy:
-            noise = np.zeros((len(rows), self.size))
-            for k, rng in enumerate(rngs):
-                if rng is not None:
-                    noise[k] = rng.standard_normal(self.size)
-        else:
-            noise = _NO_NOISE
+        noise, noisy = self.noise_rows(rngs, len(rows))
         P = _NO_PREVIEW if preview is None else preview
         out = np.empty((len(rows), self.size), np.float32)
         _observe_rows(M, A, P, rows, self._src_kind, self._src_idx, self._inv_scale, self._std, noise, noisy,
                       self._lo64, self._hi64, out)
         return out
+
+    def noise_rows(self, rngs, n: int):
+        """``(noise (n, size), noisy)`` for :meth:`measure_rows`: row k drawn from ``rngs[k]`` (none without noise
+        channels or without generators)."""
+        noisy = self._noisy and rngs is not None
+        if not noisy:
+            return _NO_NOISE, False
+        noise = np.zeros((n, self.size))
+        for k, rng in enumerate(rngs):
+            if rng is not None:
+                noise[k] = rng.standard_normal(self.size)
+        return noise, True
+
+    def rows_arrays(self) -> tuple:
+        """The compiled row path's arrays (``kind, idx, inv_scale, std, lo, hi`` of :func:`_observe_rows`)."""
+        return self._src_kind, self._src_idx, self._inv_scale, self._std, self._lo64, self._hi64
 
     def push(self, obs: np.ndarray) -> np.ndarray:
         """Push an undelayed observation into the delay ring; return the one ``delay`` steps old."""
@@ -468,13 +477,18 @@ class HeavePitchReward(RewardFn):
     COMPONENTS = ("heave", "pitch", "heave_rate", "pitch_rate", "rate_over", "end_stop", "slack", "over_tension",
                   "effort", "action_rate")
 
+    def weight_vector(self) -> np.ndarray:
+        """The weights in the order of :attr:`COMPONENTS` (those of :func:`_heave_pitch_rows`)."""
+        wv = self.__dict__.get("_wv")
+        if wv is None:                # the weights are constructor parameters: fixed after __init__
+            wv = self._wv = np.array([self.weights[k] for k in self.COMPONENTS])
+        return wv
+
     def batch(self, M: np.ndarray, A: np.ndarray, A_prev: np.ndarray, rows: np.ndarray):
         """Compiled batched form of ``__call__`` for measurement rows ``M[rows]`` (columns
         :data:`~towenv.envs.measurements.MEAS_COLUMNS`): ``(rewards (n,), components (n, 10))`` with the columns in
         the order of :attr:`COMPONENTS`."""
-        wv = self.__dict__.get("_wv")
-        if wv is None:                # the weights are constructor parameters: fixed after __init__
-            wv = self._wv = np.array([self.weights[k] for k in self.COMPONENTS])
+        wv = self.weight_vector()
         R = np.empty(len(rows))
         C = np.empty((len(rows), len(self.COMPONENTS)))
         _heave_pitch_rows(M, A, A_prev, rows, wv, self.slack_tension, self.over_tension_fraction,
