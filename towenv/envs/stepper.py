@@ -92,10 +92,10 @@ def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count
 def _entry_point(kern, args, items, gathers):
     """``(kern, items, gathers, compiled entry point)`` of the overload of ``kern`` that ``args`` select, or None.
 
-    Calling the overload's entry point skips the dispatcher's type resolution (measured 7.5 → 3.9 µs per call
-    for the batch kernel, most of it the typed lists' Python-level ``typeof``): valid while the arguments keep
-    their types — the stepper's own arrays never change type, the typed lists are checked by identity and
-    ``kind`` must be a Python int (see :meth:`BatchStepper.step`)."""
+    Calling the overload's entry point skips the dispatcher's type resolution (measured 7.3 → 4.2 µs per call
+    for the batch kernel, scripts/bench_env_parts.py; most of it the typed lists' Python-level ``typeof``):
+    valid while the arguments keep their types — the stepper's own arrays never change type, the typed lists
+    are checked by identity and ``kind`` must be a Python int (see :meth:`BatchStepper.step`)."""
     try:
         from numba import typeof
         cres = kern.overloads.get(tuple(typeof(a) for a in args))
