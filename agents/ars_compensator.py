@@ -20,6 +20,11 @@ normalised by the rewards' standard deviation) with an explicit end-stop penalty
   force: a stiffness that grows near *both* stops is a function of |s|, not of s|s| or s³;
 * ``Θ_c`` — a (2 × n_features) matrix per sea state of the skyhook gain table (the same schedule as the base).
 
+These 45 features are feature set ``"h"`` (files without a feature set are "h"). Feature set ``"hq"`` adds, before the
+constant, the tow point's vertical velocity, acceleration and heave 0.2, 0.4, …, 2.0 s *ahead* as predicted by a causal
+linear predictor from the last 10 s of the MRU's vertical motion (``agents/predictor.py``, stored in the policy file;
+75 features). On the evaluation set it did not beat "h" (docs/agents.md).
+
 Θ = 0 is the skyhook law exactly. The policy is causal: it acts on the observation vector and its own memory of
 earlier observations, plus the sea-state estimate at episode start (as the base does).
 
@@ -65,7 +70,7 @@ import numpy as np
 
 from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset_copies, save_ars_file
 
-__all__ = ["ARSCompensatorPolicy", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
+__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
            "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
            "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "entry_hit_weights", "parse_hit_weights",
@@ -103,12 +108,46 @@ GAIN_KEYS = ("c_sky", "b0", "k0", "margin", "k_stop")
 N_ACT = 2
 
 
-def feature_names() -> list[str]:
+#: feature sets: "h" (the history, instant and stroke features above; every policy before feature sets had
+#: names) and "hq" = "h" + the tow point's vertical velocity, acceleration and heave 0.2, 0.4, …, 2.0 s *ahead* as
+#: predicted by the policy's own causal linear predictor from the last 10 s of the MRU's vertical motion
+#: (``agents/predictor.py``, :data:`agents.predictor.COMP_PRED_CHANNELS`, stored in the policy file), scaled as the
+#: channel's history features, placed before the constant
+FEATURE_SETS = ("h", "hq")
+PREDICTED = frozenset({"hq"})
+
+
+def feature_names(feature_set: str = "h") -> list[str]:
+    if feature_set not in FEATURE_SETS:
+        raise ValueError(f"unknown compensator feature set {feature_set!r} (known: {', '.join(FEATURE_SETS)})")
+    pred = []
+    if feature_set in PREDICTED:
+        from .predictor import COMP_PRED_CHANNELS, feature_names as predicted_names
+        pred = predicted_names(COMP_PRED_CHANNELS)
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
-            + list(NONLINEAR) + ["const"])
+            + list(NONLINEAR) + pred + ["const"])
 
 
+#: features of feature set "h" (the policies without a feature set in their metadata)
 N_FEATURES = len(feature_names())
+
+
+def n_features(feature_set: str = "h") -> int:
+    return len(feature_names(feature_set))
+
+
+def _check_predictor(feature_set: str, predictor, what: str) -> None:
+    if feature_set not in FEATURE_SETS:
+        raise ValueError(f"{what}: unknown feature set {feature_set!r} (known: {', '.join(FEATURE_SETS)})")
+    if (feature_set in PREDICTED) != (predictor is not None):
+        raise ValueError(f"{what}: feature set {feature_set!r} " + (
+            "needs a predictor (python -m agents.predictor --env towenv/CompensatorGains-v0)" if predictor is None
+            else "has no predictor"))
+    if predictor is not None:
+        from .predictor import COMP_PRED_CHANNELS
+        if tuple(predictor.channels) != COMP_PRED_CHANNELS:
+            raise ValueError(f"{what}: the predictor reads {list(predictor.channels)}, not the compensator's "
+                             f"{list(COMP_PRED_CHANNELS)} (fit it with --env towenv/CompensatorGains-v0)")
 
 
 def _train_seed(base_seed: int, iteration: int, seed: int) -> int:
@@ -122,11 +161,14 @@ class _Features:
     """φ for a batch of observations ``(n, obs_size)`` with the history ring of every row. The single-environment
     policy uses it with n = 1, so training and deployment share one arithmetic."""
 
-    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict):
+    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None):
         self.reader = reader
         self.half = float(half_stroke)
         self.scales = dict(scales)
         self.hist = None
+        self.predictor = predictor
+        self.pring = None                   # the predictor's 10 s history ring (n, channels, RING), newest first
+        self.pkeys = None                   # the predictor's sea-state key of every row (set by the owner)
 
     def __call__(self, obs, first: bool):
         r, sc = self.reader, self.scales
@@ -146,8 +188,16 @@ class _Features:
         out = s * v
         nl = {"stroke_abs": a, "stroke_sq": s2, "stroke_4": s2 * s2, "stroke_out": out,
               "stroke_out_pos": np.maximum(out, 0.0)}
-        cols = inst + [nl[k] / sc[k] for k in NONLINEAR] + [np.ones(n)]
-        return np.concatenate([lagged, np.stack(cols, axis=1)], axis=1)
+        cols = inst + [nl[k] / sc[k] for k in NONLINEAR]
+        parts = [lagged, np.stack(cols, axis=1)]
+        if self.predictor is not None:
+            from .predictor import push
+            p = self.predictor
+            x = p.sample(np.stack([r.batch(obs, c) for c in p.channels], axis=1))
+            self.pring = push(self.pring, x, first or self.pring is None)
+            parts.append(p.predict(self.pring, self.pkeys))
+        parts.append(np.ones((n, 1)))
+        return np.concatenate(parts, axis=1)
 
 
 def _residual(theta, phi):
@@ -214,11 +264,16 @@ class ARSCompensatorPolicy:
     acts_on = "observations (and their history) + sea state"
 
     def __init__(self, theta: dict, base_table: dict, scales: dict | None = None, meta: dict | None = None,
-                 name: str = "ars_compensator"):
+                 name: str = "ars_compensator", predictor=None):
+        self.feature_set = str((meta or {}).get("feature_set") or "h")
+        _check_predictor(self.feature_set, predictor, "ARSCompensatorPolicy")
+        self.predictor = predictor
+        nf = n_features(self.feature_set)
         self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
-        bad = [k for k, v in self.theta.items() if v.shape != (N_ACT, N_FEATURES)]
+        bad = [k for k, v in self.theta.items() if v.shape != (N_ACT, nf)]
         if bad:
-            raise ValueError(f"ARSCompensatorPolicy: theta entries {bad} are not ({N_ACT}, {N_FEATURES})")
+            raise ValueError(f"ARSCompensatorPolicy: theta entries {bad} are not ({N_ACT}, {nf}) (feature set "
+                             f"{self.feature_set!r})")
         self.base_table = dict(base_table)
         self.scales = dict(FEATURE_SCALES | (scales or {}))
         self.meta = dict(meta or {})
@@ -226,6 +281,7 @@ class ARSCompensatorPolicy:
         self.meta.setdefault("env_id", ENV_ID)
         self.meta.setdefault("env_kwargs", {})
         self.meta.setdefault("stop_guard", 0.0)
+        self.meta["feature_set"] = self.feature_set
         self.stop_guard = float(self.meta["stop_guard"] or 0.0)
         if not 0.0 <= self.stop_guard <= 1.0:
             raise ValueError(f"ARSCompensatorPolicy: stop_guard must be 0 (off) or in (0, 1] (got {self.stop_guard})")
@@ -240,7 +296,7 @@ class ARSCompensatorPolicy:
         self.base = SkyhookCompensator(env, table=self.base_table)
         self.reader = self.base.reader
         self.u = env.unwrapped
-        self._feat = _Features(self.reader, self.u.half_stroke, self.scales)
+        self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor)
         self._th = None
         return self
 
@@ -260,6 +316,8 @@ class ARSCompensatorPolicy:
         if first:
             self.base.reset()
             self._th = self.theta[nearest_key(self.theta, self.u.sea[0])][None]
+            if self.predictor is not None:
+                self._feat.pkeys = [nearest_key(self.predictor.W, self.u.sea[0])]
         a_base = np.asarray(self.base.act(o), float)
         o32 = np.asarray(obs, np.float32).reshape(1, -1)
         phi = self._feat(o32, first)
@@ -283,15 +341,19 @@ class _Batch:
     """The skyhook law (``classical.SkyhookCompensator.gains`` + ``env.action_of``, element-wise) and the
     features for a batch of observations."""
 
-    def __init__(self, venv, base_table: dict, scales: dict):
+    def __init__(self, venv, base_table: dict, scales: dict, feature_set: str = "h", predictor=None):
+        _check_predictor(feature_set, predictor, "ars_compensator._Batch")
         e0 = venv.envs[0]
         self.reader = ObsReader(e0)
         self.kmap, self.bmap = e0.stiffness_range, e0.damping_range
         self.table = base_table
-        self.features = _Features(self.reader, e0.half_stroke, scales)
+        self.feature_set = feature_set
+        self.features = _Features(self.reader, e0.half_stroke, scales, predictor)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS
+        if self.features.predictor is not None:
+            self.features.pkeys = [nearest_key(self.features.predictor.W, s) for s in seas]
         self.G = np.array([[float((DEFAULT_SKYHOOK_GAINS | self.table[nearest_key(self.table, s)])[k])
                             for k in GAIN_KEYS] for s in seas])
 
@@ -544,17 +606,34 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
 def save_policy(policy: ARSCompensatorPolicy, path: str | Path) -> Path:
     """Write the policy as an .npz (weights per sea-state key, the base's gain table, scales, metadata JSON with
     ``env_id`` and ``algo``), atomically."""
-    meta = dict(policy.meta) | {"features": feature_names(), "lag_steps": list(LAG_STEPS),
+    fs = policy.feature_set
+    meta = dict(policy.meta) | {"feature_set": fs, "features": feature_names(fs), "lag_steps": list(LAG_STEPS),
                                 "history_channels": list(HISTORY_CHANNELS), "instant_channels": list(INSTANT_CHANNELS),
                                 "nonlinear": list(NONLINEAR)}
-    return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta)
+    extra = policy.predictor.arrays() if policy.predictor is not None else None
+    return save_ars_file(path, policy.theta, policy.base_table, policy.scales, meta, extra)
 
 
 def load_policy(path: str | Path) -> ARSCompensatorPolicy:
     """Read a policy written by :func:`save_policy` (bind it to an environment before use)."""
-    theta, table, scales, meta = read_ars_file(path, feature_names(), {"env_id": ENV_ID, "algo": ALGO},
+    def names_for(meta):
+        fs = meta.get("feature_set") or "h"
+        if fs not in FEATURE_SETS:
+            raise ValueError(f"{path}: unknown compensator feature set {fs!r} (this version knows "
+                             f"{', '.join(FEATURE_SETS)})")
+        return feature_names(fs)
+    theta, table, scales, meta = read_ars_file(path, names_for, {"env_id": ENV_ID, "algo": ALGO},
                                                "an ARS skyhook-residual policy")
-    return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem)
+    predictor = None
+    if (meta.get("feature_set") or "h") in PREDICTED:
+        from .predictor import Predictor
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                predictor = Predictor.from_arrays(z)
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"{path}: feature set {meta['feature_set']!r} but no readable predictor in the file "
+                             f"({type(exc).__name__}: {exc})") from None
+    return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 
 def main(argv=None) -> int:

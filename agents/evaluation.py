@@ -255,8 +255,10 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
                     "scripts/probe_semiactive_imitation.py)")
         elif meta.get("algo") == "ars_skyhook":
             desc = ("Gauss-Newton policy search (the ARS compensator policy class)" if gn else "ARS policy") + (
-                    ", linear residual on `skyhook` over the tow-point heave history and stroke features "
-                    f"({meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
+                    ", linear residual on `skyhook` over the tow-point heave history and stroke features"
+                    + (" and the tow point's vertical motion 0.2-2.0 s ahead predicted from 10 s of MRU history "
+                       "(agents/predictor.py)" if meta.get("feature_set") == "hq" else "")
+                    + f" ({meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
                     f"seed {meta.get('seed', '?')})")
         for w in meta.get("env_wrapper") or []:
             if isinstance(w, dict):

@@ -17,6 +17,10 @@ Per iteration:
    candidate with the lowest mean ARS compensator cost (:mod:`agents.ars_compensator`: log σ ratios to skyhook,
    w_hit · hits, w_margin · margin) — no step if none beats the current Θ.
 
+Options: ``feature_set="hq"`` with a ``predictor`` (the init's weights copied by feature name, the predicted ones
+starting at 0), and ``free="predicted"`` to move only the predicted features' weights (the Jacobian then has one column
+per moved weight).
+
 The result is an :class:`agents.ars_compensator.ARSCompensatorPolicy` (same features, stop guard and file format,
 ``meta["method"] = "gauss-newton"``), so ``scripts/evaluate.py`` loads it unchanged. It starts from Θ = 0 (skyhook)
 or from a policy file (``init``: its Θ, base table and stop guard are kept).
@@ -53,6 +57,40 @@ def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = Fa
     return int(base_seed) + SEED_OFFSET + 200 * int(iteration) + (100 if line_search else 0) + 100000 * int(seed)
 
 
+def initial_theta(init, keys, feature_set: str) -> np.ndarray:
+    """Θ (len(keys), 2, n_features(feature_set)) to start from: zeros (skyhook), or ``init``'s weights copied by
+    feature name (features ``init`` does not have start at 0)."""
+    theta = np.zeros((len(keys), arc.N_ACT, arc.n_features(feature_set)))
+    if init is None:
+        return theta
+    missing = [k for k in keys if k not in init.theta]
+    if missing:
+        raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
+    names, inames = arc.feature_names(feature_set), arc.feature_names(init.feature_set)
+    cols = [(i, inames.index(nm)) for i, nm in enumerate(names) if nm in inames]
+    for c, k in enumerate(keys):
+        for i, j in cols:
+            theta[c, :, i] = init.theta[k][:, j]
+    return theta
+
+
+def free_mask(feature_set: str, free: str) -> np.ndarray:
+    """Which of the (2, n_features) weights the search moves: ``"all"``, or ``"predicted"`` (only the predicted
+    features' weights of a :data:`agents.ars_compensator.PREDICTED` feature set; the rest stay as they start), as a
+    flat boolean mask over the 2 × n_features weights (row-major, as Θ.reshape(-1))."""
+    names = arc.feature_names(feature_set)
+    if free == "all":
+        cols = np.ones(len(names), bool)
+    elif free == "predicted":
+        if feature_set not in arc.PREDICTED:
+            raise ValueError(f"free='predicted' needs a feature set with predicted features "
+                             f"({', '.join(sorted(arc.PREDICTED))}; got {feature_set!r})")
+        cols = np.array([nm.endswith("(pred)") for nm in names])
+    else:
+        raise ValueError(f"free must be 'all' or 'predicted' (got {free!r})")
+    return np.tile(cols, arc.N_ACT)
+
+
 def _costs(sh, sp, hits, mg, pitch_weight, hit_weight, margin_weight, fail_penalty=1.0):
     """ARS compensator cost (:mod:`agents.ars_compensator`) of candidate rows 1… of (candidates, episodes) arrays
     against row 0 (skyhook) on the same waves: ln σ_h ratio + w_p ln σ_θ ratio + w_hit · hits + w_margin · margin;
@@ -67,12 +105,16 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
           ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, hit_weight: float = arc.DEFAULT_HIT_WEIGHT,
           margin_weight: float = arc.DEFAULT_MARGIN_WEIGHT, margin_start: float = arc.DEFAULT_MARGIN_START,
           stop_guard: float | None = None, episode_seconds: float = 180.0, discard: float = 60.0, entries=None,
-          init: arc.ARSCompensatorPolicy | None = None, progress: bool = True,
-          log=print) -> arc.ARSCompensatorPolicy:
-    """Gauss–Newton search (module docstring) from Θ = 0 (skyhook) or from ``init``. Stops after ``iterations``
-    (continuing a Gauss–Newton ``init``'s count, so its wave seeds stay fresh) or when the next iteration would pass
-    ``minutes`` of wall time. ``stop_guard``: None = the init's (0 without init). ``entries``: indices into the
-    evaluation (sea state, heading) list to train on (default all 12)."""
+          init: arc.ARSCompensatorPolicy | None = None, progress: bool = True, feature_set: str | None = None,
+          predictor=None, free: str = "all", log=print) -> arc.ARSCompensatorPolicy:
+    """Gauss–Newton search (module docstring) from Θ = 0 (skyhook) or from ``init`` (its weights copied by feature
+    name; features it does not have start at 0). Stops after ``iterations`` (continuing a Gauss–Newton ``init``'s
+    count, so its wave seeds stay fresh) or when the next iteration would pass ``minutes`` of wall time.
+    ``stop_guard``: None = the init's (0 without init). ``entries``: indices into the evaluation (sea state,
+    heading) list to train on (default all 12; the other sea states keep ``init``'s weights). ``feature_set``:
+    None = the init's ("h" without init); ``predictor``: the causal predictor of a predicted feature set ("hq",
+    agents/predictor.py; default ``init``'s). ``free``: "all" weights move, or only the "predicted" features'
+    (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper)."""
     __import__("towenv")
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from .baselines import load_tuned
@@ -83,20 +125,21 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     guard = float(init.stop_guard if init is not None else 0.0) if stop_guard is None else float(stop_guard)
     if not 0.0 <= guard <= 1.0:
         raise ValueError(f"stop_guard must be 0 (off) or in (0, 1] (got {guard})")
+    fs = (init.feature_set if init is not None else "h") if feature_set is None else str(feature_set)
+    if predictor is None and init is not None and fs in arc.PREDICTED:
+        predictor = init.predictor
+    arc._check_predictor(fs, predictor, "gn_compensator.train")
+    mask = free_mask(fs, free)
     t_start = time.perf_counter()
     first = first_iteration(init, iterations, MAX_ITERATIONS)
     table = dict(init.base_table) if init is not None else dict(load_tuned().get("skyhook") or {})
     if not table:
         raise RuntimeError("no tuned skyhook table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
     ev, idx, keys = training_entries(arc.ENV_ID, table, entries)
-    C, NA, NF, R = len(keys), arc.N_ACT, arc.N_FEATURES, int(replicates)
-    NW = NA * NF
-    theta = np.zeros((C, NA, NF))
-    if init is not None:
-        missing = [k for k in keys if k not in init.theta]
-        if missing:
-            raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
-        theta = np.array([init.theta[k] for k in keys], float)
+    C, NA, NF, R = len(keys), arc.N_ACT, arc.n_features(fs), int(replicates)
+    free_idx = np.flatnonzero(mask)                 # the moved weights, as flat indices into Θ.reshape(-1)
+    NW = len(free_idx)
+    theta = initial_theta(init, keys, fs)
     ridges = [float(r) for r in ridges]
     n_ep = len(idx) * R
     n_jac, n_ls = n_ep * (NW + 1), n_ep * (len(ridges) + 2)
@@ -104,10 +147,11 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     venv_j = CompensatorGainsVectorEnv(num_envs=n_jac, **kw)
     venv_l = CompensatorGainsVectorEnv(num_envs=n_ls, **kw)
     scales = dict(init.scales) if init is not None else dict(arc.FEATURE_SCALES)
-    batch_j = arc._Batch(venv_j, table, scales)
-    batch_l = arc._Batch(venv_l, table, scales)
+    batch_j = arc._Batch(venv_j, table, scales, fs, predictor)
+    batch_l = arc._Batch(venv_l, table, scales, fs, predictor)
     curve = []
-    log(f"[gn_comp] seed {seed}: {C} sea states, {NA} x {NF} weights each; per iteration {n_ep} episodes x ({NW} + 1) "
+    log(f"[gn_comp] seed {seed}: feature set {fs}, {C} sea states, {NA} x {NF} weights each ({NW} moved: {free}); "
+        f"per iteration {n_ep} episodes x ({NW} + 1) "
         f"for the Jacobian and {n_ep} x ({len(ridges)} ridges + current + skyhook) for the line search, "
         f"{episode_seconds:g} s each; eps={eps} ridges={ridges} pitch_weight={pitch_weight} hit_weight={hit_weight} "
         f"margin_weight={margin_weight} margin_start={margin_start} stop_guard={guard}"
@@ -121,11 +165,12 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
         reps = [r for r in range(R) for _i in idx]
         code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
         seas = [sea for sea, _s in ents]
-        # 1. Jacobian: copy block 0 runs Θ, block i + 1 runs Θ + ε e_i (flat index i over the 2 x NF weights)
+        # 1. Jacobian: copy block 0 runs Θ, block i + 1 runs Θ + ε e_{free_idx[i]} (flat index over the 2 x NF
+        #    weights; every weight with free = "all")
         seeds = [train_seed(s + 10 * r, it, seed) for (_sea, s), r in zip(ents, reps)]
-        th = np.repeat(theta[code].reshape(n_ep, NW)[None], NW + 1, axis=0)
-        for i in range(NW):
-            th[i + 1, :, i] += eps
+        th = np.repeat(theta[code].reshape(n_ep, NA * NF)[None], NW + 1, axis=0)
+        for i, f in enumerate(free_idx):
+            th[i + 1, :, f] += eps
         H, P, S, t, _hits, ended, _a = arc.rollout_series(venv_j, batch_j, seas * (NW + 1), seeds * (NW + 1),
                                                           th.reshape(-1, NA, NF), stop_guard=guard)
         w = t >= discard
@@ -145,8 +190,11 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
                                     (Jm, m0, np.full(n_ep, 2.0 * margin_weight))], code, ok, C, ridges)
         # 3. line search on fresh episodes: skyhook, Θ, Θ + Δ(λ) for every λ, on the same waves
         seeds_l = [train_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
-        flat = theta[code].reshape(n_ep, NW)
-        cand = np.concatenate([np.zeros((1, n_ep, NW)), flat[None], flat[None] + steps[:, code]])
+        full = np.zeros((len(ridges), C, NA * NF))      # the steps of the moved weights, as full Θ steps
+        full[:, :, free_idx] = steps
+        steps = full
+        flat = theta[code].reshape(n_ep, NA * NF)
+        cand = np.concatenate([np.zeros((1, n_ep, NA * NF)), flat[None], flat[None] + steps[:, code]])
         sh, sp, hits, mg = arc.rollout_batch(venv_l, batch_l, seas * len(cand), seeds_l * len(cand),
                                              cand.reshape(-1, NA, NF), discard=discard, margin_start=margin_start,
                                              stop_guard=guard)
@@ -189,12 +237,16 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
                                 "ridges": ridges, "pitch_weight": pitch_weight, "hit_weight": hit_weight,
                                 "margin_weight": margin_weight, "margin_start": margin_start,
                                 "episode_seconds": episode_seconds, "discard": discard, "entries": idx,
-                                "init": init.name if init is not None else None},
+                                "init": init.name if init is not None else None, "free": free},
+            "feature_set": fs,
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)}",
             "curve": curve}
-    return arc.ARSCompensatorPolicy({k: theta[c] for c, k in enumerate(keys)}, table, scales, meta,
-                                    name=f"gn_comp_s{seed}")
+    out = {k: theta[c] for c, k in enumerate(keys)}
+    if init is not None:                        # sea states not trained on (``entries``) keep the initial weights
+        rest = sorted(set(init.theta) - set(keys))
+        out |= {k: row for k, row in zip(rest, initial_theta(init, rest, fs))}
+    return arc.ARSCompensatorPolicy(out, table, scales, meta, name=f"gn_comp_s{seed}", predictor=predictor)
 
 
 def default_export(seed: int) -> Path:
@@ -220,6 +272,15 @@ def main(argv=None) -> int:
                     help="weight of the stroke-margin term")
     ap.add_argument("--stop-guard", type=float, default=None, help="stop guard (default: the init policy's, else 0)")
     ap.add_argument("--init", default=None, help="start from this ARS/GN compensator policy file")
+    ap.add_argument("--features", default=None, choices=arc.FEATURE_SETS,
+                    help="feature set (default: the init policy's, else h); hq adds the predicted tow-point motion "
+                         "and needs --predictor (or an hq init)")
+    ap.add_argument("--predictor", default=None, help="predictor file of feature set hq (python -m agents.predictor "
+                                                      "--env towenv/CompensatorGains-v0 --out FILE)")
+    ap.add_argument("--free", default="all", choices=("all", "predicted"),
+                    help="which weights the search moves: all (default), or only the predicted features' (hq)")
+    ap.add_argument("--entries", type=int, nargs="+", default=None,
+                    help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
@@ -244,10 +305,18 @@ def main(argv=None) -> int:
             init = arc.load_policy(a.init)
         except (OSError, ValueError, KeyError) as e:
             ap.error(f"--init: {e}")
+    predictor = None
+    if a.predictor:
+        from .predictor import Predictor
+        try:
+            predictor = Predictor.load(a.predictor)
+        except ValueError as e:
+            ap.error(f"--predictor: {e}")
     out = Path(a.export or default_export(a.seed))
     try:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight, a.hit_weight,
-                    a.margin_weight, stop_guard=a.stop_guard, init=init)
+                    a.margin_weight, stop_guard=a.stop_guard, init=init, entries=a.entries, feature_set=a.features,
+                    predictor=predictor, free=a.free)
     except ValueError as e:
         ap.error(str(e))
     arc.save_policy(pol, out)

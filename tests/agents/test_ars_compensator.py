@@ -26,12 +26,23 @@ SECONDS = 30.0
 DISCARD = 10.0
 
 
-def _policy(scale=0.05, seed=0):
-    """A policy with random weights on the tuned skyhook table (scale 0.05 moves the gains noticeably)."""
+def _predictor():
+    """The committed predictor of the compensator's tow-point motion (feature set hq)."""
+    from pathlib import Path
+
+    import agents
+    from agents.predictor import Predictor
+    return Predictor.load(Path(agents.__file__).parent / "trained" / "predictor_CompensatorGains-v0.npz")
+
+
+def _policy(scale=0.05, seed=0, fs="h"):
+    """A policy with random weights on the tuned skyhook table (scale 0.05 moves the gains noticeably); feature set
+    ``fs`` (hq: with the committed predictor)."""
     table = load_tuned()["skyhook"]
     rng = np.random.default_rng(seed)
-    theta = {k: rng.normal(0.0, scale, (AC.N_ACT, AC.N_FEATURES)) for k in table}
-    return AC.ARSCompensatorPolicy(theta, table, meta={"seed": seed, "iterations": 0})
+    theta = {k: rng.normal(0.0, scale, (AC.N_ACT, AC.n_features(fs))) for k in table}
+    return AC.ARSCompensatorPolicy(theta, table, meta={"seed": seed, "iterations": 0, "feature_set": fs},
+                                   predictor=_predictor() if fs in AC.PREDICTED else None)
 
 
 @pytest.fixture(scope="module")
@@ -62,19 +73,20 @@ def test_zero_weights_are_the_skyhook_law(env):
         assert np.array_equal(a.data[k], b.data[k]), k
 
 
-def test_single_env_policy_equals_the_batched_training_rollout(env):
+@pytest.mark.parametrize("fs", ["h", "hq"])
+def test_single_env_policy_equals_the_batched_training_rollout(env, fs):
     """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ, the
     same end-stop hits and the same stroke-margin term (from the ``comp_stroke`` observation, which is the true
-    stroke / half stroke of the simulator to float32 precision)."""
+    stroke / half stroke of the simulator to float32 precision); with the predicted features too (hq)."""
     from towenv.envs.vector import CompensatorGainsVectorEnv
-    pol = _policy(scale=0.05).bind_env(env)
+    pol = _policy(scale=0.05, fs=fs).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
     picks = [0, 6, 11]                                  # one entry per sea state
     seas = [ev[i][0] for i in picks]
     seeds = [ev[i][1] + 123456 for i in picks]
     venv = CompensatorGainsVectorEnv(num_envs=3, autoreset_mode="NextStep", batch_infos=True,
                                      episode_seconds=SECONDS)
-    batch = AC._Batch(venv, pol.base_table, pol.scales)
+    batch = AC._Batch(venv, pol.base_table, pol.scales, fs, pol.predictor)
     theta = np.array([pol.theta[nearest_key(pol.theta, s)] for s in seas])
     m0 = 0.2                                            # low enough for a non-zero term in 30 s episodes
     sh, sp, hits, mg, acts = AC.rollout_batch(venv, batch, seas, seeds, theta, discard=DISCARD, record_actions=True,
@@ -156,11 +168,12 @@ def test_stop_guard_acts_exactly_where_its_condition_holds(env):
         AC.ARSCompensatorPolicy({}, table, meta={"stop_guard": 1.5})
 
 
-def test_policy_is_causal(env):
+@pytest.mark.parametrize("fs", ["h", "hq"])
+def test_policy_is_causal(env, fs):
     """Actions depend only on the observations handed to predict() (and the sea-state estimate): a replay of the
     recorded observations to a fresh policy bound to an env in an unrelated state gives the same actions, and
-    changing a *later* observation leaves the earlier actions unchanged."""
-    pol = _policy(scale=0.05).bind_env(env)
+    changing a *later* observation leaves the earlier actions unchanged (hq: its predicted preview too)."""
+    pol = _policy(scale=0.05, fs=fs).bind_env(env)
     sea, seed = env.unwrapped.eval_sea_states()[6]
     obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
     seq, acts = [], []
@@ -173,12 +186,12 @@ def test_policy_is_causal(env):
     other.reset(seed=seed + 1, options={"sea_state": sea, "sea_seed": seed + 1})
     for _ in range(17):
         other.step(np.array([0.3, -0.2], np.float32))
-    replay = _policy(scale=0.05).bind_env(other)
+    replay = _policy(scale=0.05, fs=fs).bind_env(other)
     again = [replay.predict(o, episode_start=np.array([k == 0]))[0] for k, o in enumerate(seq)]
     assert all(np.array_equal(x, y) for x, y in zip(acts, again))
     changed = [o.copy() for o in seq]
     changed[40] = changed[40] + 0.5
-    replay2 = _policy(scale=0.05).bind_env(other)
+    replay2 = _policy(scale=0.05, fs=fs).bind_env(other)
     alt = [replay2.predict(o, episode_start=np.array([k == 0]))[0] for k, o in enumerate(changed)]
     assert all(np.array_equal(x, y) for x, y in zip(acts[:40], alt[:40]))
     assert not np.array_equal(acts[40], alt[40])
@@ -212,6 +225,45 @@ def test_policy_file_round_trip_and_refusal(tmp_path, env):
         ars.load_ars_policy(f)
     with pytest.raises(RuntimeError, match="bind_env"):
         _policy().predict(np.zeros(env.observation_space.shape, np.float32))
+
+
+def test_predicted_feature_set_round_trip_zero_start_and_refusals(tmp_path, env):
+    """hq: its file carries the predictor (same actions after the round trip); with the predicted weights at 0 it acts
+    as the h policy with the same other weights (to round-off: the sums run over more zero terms); it needs the
+    compensator's predictor, and an h policy takes none."""
+    from agents.predictor import Predictor
+    pol = _policy(scale=0.02, seed=5, fs="hq")
+    f = AC.save_policy(pol, tmp_path / "q.npz")
+    back = AC.load_policy(f)
+    assert back.feature_set == "hq" and back.meta["features"] == AC.feature_names("hq")
+    assert back.predictor.channels == pol.predictor.channels and back.predictor.meta == pol.predictor.meta
+    assert all(np.array_equal(back.predictor.W[k], pol.predictor.W[k]) for k in pol.predictor.W)
+    sea, seed = env.unwrapped.eval_sea_states()[7]
+    assert np.array_equal(_actions(env, pol.bind_env(env), sea, seed, 80),
+                          _actions(env, back.bind_env(env), sea, seed, 80))
+    h = _policy(scale=0.05, seed=6)
+    names, hq_names = AC.feature_names("h"), AC.feature_names("hq")
+    assert [n for n in hq_names if not n.endswith("(pred)")] == names and hq_names[-1] == "const"
+    assert sum(n.endswith("(pred)") for n in hq_names) == 30
+    cols = [hq_names.index(n) for n in names]
+    theta = {}
+    for k, v in h.theta.items():
+        theta[k] = np.zeros((AC.N_ACT, AC.n_features("hq")))
+        theta[k][:, cols] = v
+    q = AC.ARSCompensatorPolicy(theta, h.base_table, meta={"feature_set": "hq"}, predictor=_predictor())
+    a_h = _actions(env, h.bind_env(env), sea, seed, 200)
+    a_q = _actions(env, q.bind_env(env), sea, seed, 200)
+    np.testing.assert_allclose(a_q, a_h, rtol=0, atol=1e-6)        # float32 actions of equal-to-round-off sums
+    with pytest.raises(ValueError, match="needs a predictor"):
+        AC.ARSCompensatorPolicy(theta, h.base_table, meta={"feature_set": "hq"})
+    with pytest.raises(ValueError, match="has no predictor"):
+        AC.ARSCompensatorPolicy(h.theta, h.base_table, predictor=_predictor())
+    with pytest.raises(ValueError, match="unknown feature set"):
+        AC.ARSCompensatorPolicy(h.theta, h.base_table, meta={"feature_set": "v2q"})
+    from pathlib import Path
+    winch = Predictor.load(Path(AC.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
+    with pytest.raises(ValueError, match="not the compensator's"):
+        AC.ARSCompensatorPolicy(theta, h.base_table, meta={"feature_set": "hq"}, predictor=winch)
 
 
 def test_evaluate_dispatches_policy_files_on_their_metadata(tmp_path):

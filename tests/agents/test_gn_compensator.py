@@ -50,7 +50,8 @@ def test_search_runs_on_the_batched_env_and_keeps_only_improving_steps(trained):
 
 
 def test_warm_start_keeps_the_initial_policy(monkeypatch):
-    """From a committed ARS policy: its weights (for sea states without a kept step), base table and stop guard;
+    """From a committed ARS policy: its weights (for sea states without a kept step or not trained on), base table
+    and stop guard;
     an ARS start begins at Gauss–Newton iteration 0, a Gauss–Newton start continues its count."""
     init = _committed(0)
     used = []
@@ -59,8 +60,10 @@ def test_warm_start_keeps_the_initial_policy(monkeypatch):
         b, it, sd, line_search))
     pol = gnc.train(seed=4, iterations=1, entries=[8], episode_seconds=62.0, discard=60.0, progress=False, init=init)
     assert set(used) == {0} and pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
-    (k,) = pol.theta
     pick = pol.meta["curve"][0]["picks"][0]
+    k = pick["sea_state"]
+    assert sorted(pol.theta) == sorted(init.theta)           # the sea states not trained on keep their weights
+    assert all(np.array_equal(pol.theta[x], init.theta[x]) for x in pol.theta if x != k)
     if pick["ridge"] is None:
         assert np.array_equal(pol.theta[k], init.theta[k])
     else:
@@ -69,6 +72,43 @@ def test_warm_start_keeps_the_initial_policy(monkeypatch):
     again = gnc.train(seed=4, iterations=1, entries=[8], episode_seconds=62.0, discard=60.0, progress=False, init=pol)
     assert set(used) == {1} and again.meta["first_iteration"] == 1
     assert again.meta["hyperparameters"]["init"] == pol.name
+
+
+def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
+    """From a committed Gauss–Newton policy to feature set hq: its weights copied by feature name, the predicted ones
+    start at 0; with free="predicted" only those move (and the Jacobian has one column per predicted weight); the
+    sea states not trained on keep the initial weights; free="predicted" needs a predicted feature set."""
+    from agents.predictor import Predictor
+    import agents
+    trained = Path(agents.__file__).parent / "trained"
+    init = arc.load_policy(trained / "gn_CompensatorGains-v0_s1.npz")
+    pred = Predictor.load(trained / "predictor_CompensatorGains-v0.npz")
+    pol = gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, discard=60.0, progress=False,
+                    init=init, feature_set="hq", predictor=pred, free="predicted")
+    assert pol.feature_set == "hq" and pol.predictor is pred and pol.meta["hyperparameters"]["free"] == "predicted"
+    names, old = arc.feature_names("hq"), arc.feature_names("h")
+    keep = [names.index(n) for n in old]
+    moved = [i for i, n in enumerate(names) if n.endswith("(pred)")]
+    assert len(moved) == 30 and sorted(keep + moved) == list(range(len(names)))
+    assert sorted(pol.theta) == sorted(init.theta)
+    for k in pol.theta:
+        assert np.array_equal(pol.theta[k][:, keep], init.theta[k])
+    (pick,) = pol.meta["curve"][0]["picks"]
+    k = pick["sea_state"]
+    others = [x for x in pol.theta if x != k]
+    assert all(not np.any(pol.theta[x][:, moved]) for x in others)
+    assert np.linalg.norm(pol.theta[k][:, moved]) == pytest.approx(pick["step_norm"])
+    # 1 episode x (60 moved weights + 1) Jacobian copies + (3 ridges + 2) line-search copies, 62 s each
+    assert pol.meta["num_timesteps"] == (2 * 30 + 1 + 5) * 620
+    mask = gnc.free_mask("hq", "predicted")
+    assert mask.shape == (arc.N_ACT * len(names),) and mask.sum() == 60
+    assert np.all(gnc.free_mask("h", "all"))
+    with pytest.raises(ValueError, match="free='predicted' needs"):
+        gnc.free_mask("h", "predicted")
+    with pytest.raises(ValueError, match="free must be"):
+        gnc.free_mask("hq", "some")
+    with pytest.raises(ValueError, match="needs a predictor"):
+        gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
 
 def _seed_sets():
@@ -273,8 +313,34 @@ def test_continued_gauss_newton_policies_carry_their_recipe_and_act(seed):
     _assert_acts_in_box_and_unlike(pol, init)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_predicted_preview_policies_carry_their_recipe_and_act(seed):
+    """The compensator policies with the predicted preview (``gnq``, feature set hq, docs/agents.md) are package data,
+    record their recipe (iterations from 6 on, 2 replicates, ridges 0.01…100, only the predicted features' weights
+    moved, from the ``gn`` file of the same seed), carry the committed compensator predictor, keep every other weight
+    of ``gn`` exactly, and act inside the action box, not as ``gn`` does."""
+    import agents
+    from agents.predictor import COMP_PRED_CHANNELS, Predictor
+    base = Path(agents.__file__).parent / "trained"
+    pol = arc.load_policy(base / f"gnq_CompensatorGains-v0_s{seed}.npz")
+    init = arc.load_policy(base / f"gn_CompensatorGains-v0_s{seed}.npz")
+    pred = Predictor.load(base / "predictor_CompensatorGains-v0.npz")
+    hp = pol.meta["hyperparameters"]
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == "hq"
+    assert pol.meta["first_iteration"] == 6 and pol.meta["iterations"] >= 1
+    assert (hp["replicates"], hp["ridges"], hp["init"], hp["free"]) == (
+        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"gn_CompensatorGains-v0_s{seed}", "predicted")
+    assert pol.predictor.channels == COMP_PRED_CHANNELS
+    assert all(np.array_equal(pol.predictor.W[k], pred.W[k]) for k in pred.W) and sorted(pol.predictor.W) == sorted(pred.W)
+    names = arc.feature_names("hq")
+    keep = [names.index(n) for n in arc.feature_names("h")]
+    assert all(np.array_equal(pol.theta[k][:, keep], init.theta[k]) for k in init.theta)
+    assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
+    _assert_acts_in_box_and_unlike(pol, init)
+
+
 def test_predictor_fit_seeds_are_disjoint_from_every_other_set():
-    """The WinchPayout predictor's fitting episodes (agents/predictor.py, +97000 + 10·replicate) are never an
+    """The predictors' fitting episodes (WinchPayout and CompensatorGains: the same values) (agents/predictor.py, +97000 + 10·replicate) are never an
     evaluation, final, tuning, validation, ARS, probe, Gauss–Newton (winch or compensator) or teacher seed, value by
     value; replicate 10 is refused."""
     from agents import predictor

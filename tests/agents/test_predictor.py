@@ -31,6 +31,26 @@ def test_fit_on_short_episodes_beats_persistence_and_round_trips(tmp_path, capsy
         P.Predictor.load(tmp_path / "missing.npz")
 
 
+def test_compensator_predictor_fits_the_vertical_motion_and_beats_persistence():
+    """The compensator's predictor (feature set hq): the MRU's vertical channels, all three predicted; held-out R² at
+    +0.2 s near 1 and at +1.0 s above persistence, as the along-cable one; an unknown environment is refused."""
+    pred = P.fit_predictor(replicates=2, episode_seconds=100.0, discard=60.0, entries=[4], log=lambda *_: None,
+                           env_id="towenv/CompensatorGains-v0")
+    assert pred.channels == P.COMP_PRED_CHANNELS and pred.meta["env_id"] == "towenv/CompensatorGains-v0"
+    assert pred.feature_names()[0] == "tow_vel_z@+0.2s(pred)" and len(pred.feature_names()) == 30
+    r2 = np.array(pred.meta["r2_heldout"]["hs1.88_tp5.90"])
+    assert r2.shape == (3, len(P.LEADS)) and np.all(r2[:, 0] > 0.99)
+    sea, base = gym.make("towenv/CompensatorGains-v0").unwrapped.eval_sea_states()[4]
+    X = P.record_compensator_channels([sea], [P.predictor_seed(base, 1)], P.COMP_PRED_CHANNELS,
+                                      episode_seconds=100.0)[600:, 0]
+    persistence = [1 - np.mean((x[10:] - x[:-10]) ** 2) / np.var(x[10:]) for x in X.T]
+    assert np.all(r2[:, P.LEADS.index(10)] > np.array(persistence) + 0.2), (r2[:, 4], persistence)
+    with pytest.raises(ValueError, match="env_id"):
+        P.fit_predictor(entries=[4], env_id="towenv/Pendulum")
+    with pytest.raises(ValueError, match="channels"):
+        P.Predictor(pred.W, pred.scales, {"channels": ["tow_vel_z", "tow_heave", "tow_acc_z"]})
+
+
 @pytest.mark.parametrize("kw, field", [({"replicates": 1}, "replicates"), ({"replicates": 11}, "replicates"),
                                        ({"ridge": 0.0}, "ridge"), ({"episode_seconds": 70.0}, "episode_seconds")])
 def test_bad_settings_are_refused_naming_the_field(kw, field):
