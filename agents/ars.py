@@ -141,6 +141,7 @@ class ARSPolicy:
         if (self.feature_set in PREDICTED) != (predictor is not None):
             raise ValueError(f"ARSPolicy: feature set {self.feature_set!r} "
                              + ("needs a predictor (agents/predictor.py)" if predictor is None else "has no predictor"))
+        _check_predictor_channels(predictor, "ARSPolicy")
         self.predictor = predictor
         self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
         nf = n_features(self.feature_set)
@@ -199,6 +200,16 @@ def _extra_single(reader, obs, name):
     return float(np.asarray(v).reshape(-1)[0])
 
 
+def _check_predictor_channels(predictor, what: str) -> None:
+    """ValueError unless ``predictor`` (if any) reads the WinchPayout predictor's channels (not the compensator's)."""
+    if predictor is None:
+        return
+    from .predictor import PRED_CHANNELS
+    if tuple(predictor.channels) != PRED_CHANNELS:
+        raise ValueError(f"{what}: the predictor reads {list(predictor.channels)}, not the WinchPayout predictor's "
+                         f"{list(PRED_CHANNELS)} (fit it with python -m agents.predictor, default --env)")
+
+
 def features_single(reader, obs, scales, hist, feature_set: str = "v1", predictor=None, pkey=None):
     """φ of one observation given the history ring ``hist`` ((3, N_HISTORY), newest first; None at episode start:
     filled with the first observation; for a feature set with :data:`LONG_HISTORY` or a predictor (:data:`PREDICTED`;
@@ -244,6 +255,7 @@ class _Batch:
         if (feature_set in PREDICTED) != (predictor is not None):
             raise ValueError(f"feature set {feature_set!r} " + ("needs a predictor (agents/predictor.py)"
                                                                 if predictor is None else "has no predictor"))
+        _check_predictor_channels(predictor, "ARS training")
         self.predictor = predictor
         self.reader = ObsReader(venv.envs[0])
         _require_channels(self.reader, feature_set, "ARS training")

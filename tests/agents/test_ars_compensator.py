@@ -264,6 +264,10 @@ def test_predicted_feature_set_round_trip_zero_start_and_refusals(tmp_path, env)
     winch = Predictor.load(Path(AC.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
     with pytest.raises(ValueError, match="not the compensator's"):
         AC.ARSCompensatorPolicy(theta, h.base_table, meta={"feature_set": "hq"}, predictor=winch)
+    wtable = load_tuned()["along_cable"]               # and the WinchPayout class refuses the compensator's predictor
+    with pytest.raises(ValueError, match="not the WinchPayout predictor's"):
+        ars.ARSPolicy({k: np.zeros(ars.n_features("v2q")) for k in wtable}, wtable, feature_set="v2q",
+                      predictor=_predictor())
 
 
 def test_evaluate_dispatches_policy_files_on_their_metadata(tmp_path):
