@@ -354,3 +354,19 @@ def test_predictor_fit_seeds_are_disjoint_from_every_other_set():
     assert not mine & (reserved | others)
     with pytest.raises(ValueError, match="replicate"):
         predictor.predictor_seed(base[0], predictor.MAX_REPLICATES)
+
+
+def test_residual_split_probe_separates_the_predicted_part():
+    """scripts/probe_residual_split.py: on a committed hq policy it reports, per sea state, a finite RMS of the
+    predicted features' part of the residual (non-zero somewhere: the search moved some of those weights) and a
+    non-zero one of the rest (the gn weights); a policy without predicted features is refused naming the set."""
+    import agents
+    script = load_script("probe_residual_split")
+    base = Path(agents.__file__).parent / "trained"
+    res = script.residual_split(base / "gnq_CompensatorGains-v0_s1.npz", episode_seconds=64.0, discard=60.0)
+    assert sorted(res) == [3, 4, 5]
+    for p, r in res.values():
+        assert p.shape == r.shape == (2,) and np.all(np.isfinite(p)) and np.all(r > 0)
+    assert any(np.any(p > 0) for p, _r in res.values())          # the search moved some predicted weights
+    with pytest.raises(ValueError, match="need hq"):
+        script.residual_split(base / "gn_CompensatorGains-v0_s1.npz", episode_seconds=64.0)
