@@ -7,6 +7,12 @@ interfaces that the previous release also has, so the same command against an ol
   dispatcher, and through the compiled entry point the stepper now uses (where the stepper has one);
 * one tow-point refill: ``TowPointBuffer.block`` of one aligned 128-step block with its mean track;
 * the batched vector env's per-step ``info`` (``TowVectorEnv._batched_infos``) at N = 1.
+* the layers of one WinchPayout-v0 env step (zero action), each timed on its own, so that the difference between
+  two rows is the Python of that layer: the ``gym.make`` env (Gymnasium's wrappers), ``TowEnv.step``,
+  ``base.step_copies`` (action map, observation/reward/flags, result), ``BatchStepper.step`` (the compiled physics
+  of one control step with its per-call costs) and the single env's ``StepResult.info``. The env and step_copies
+  rows include an episode reset every 3000 steps; the step_copies and stepper rows step on past the episode's end
+  (the physics does not care).
 
     python scripts/bench_env_parts.py
 """
@@ -58,6 +64,39 @@ def main():
     venv.reset(seed=0)
     res, idx, _, _ = venv._step_arrays(np.zeros((1, 1), np.float32))
     print(f"batched env info at N = 1: {_best(lambda: venv._batched_infos(res, idx), 5000):.1f} µs")
+    _layers()
+
+
+def _layers():
+    import gymnasium as gym
+    from towenv.envs import base as B
+    wrapped = gym.make("towenv/WinchPayout-v0")
+    wrapped.reset(seed=0)
+    env = wrapped.unwrapped
+    a = np.zeros(wrapped.action_space.shape, np.float32)
+
+    def step_wrapped():
+        _o, _r, te, tr, _i = wrapped.step(a)
+        if te or tr:
+            wrapped.reset(seed=1)
+
+    def step_env():
+        _o, _r, te, tr, _i = env.step(a)
+        if te or tr:
+            wrapped.reset(seed=1)
+
+    step_wrapped()
+    rows, idx = env._rows, np.array([env._row])
+    res = B.step_copies([env], rows, idx)
+    st = rows.stepper
+    n = 2000
+    print("one WinchPayout-v0 step by layer (µs of CPU; the difference between two rows is that layer's Python):")
+    for name, f in (("gym.make env (wrappers + TowEnv.step)", step_wrapped), ("TowEnv.step", step_env),
+                    ("base.step_copies", lambda: B.step_copies([env], rows, idx)),
+                    ("BatchStepper.step (physics + per-call compiled costs)",
+                     lambda: st.step(env.substeps, env.ACT_KIND, None)),
+                    ("StepResult.info (inside TowEnv.step)", lambda: res.info(0))):
+        print(f"  {name}: {_best(f, n):.1f}")
 
 
 if __name__ == "__main__":
