@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .common import ObsReader, nearest_key
+from .predictor import PRED_CHANNELS, check_channels, from_policy_file, push
 
 __all__ = ["ARSPolicy", "train", "save_policy", "load_ars_policy", "features_single", "HISTORY_CHANNELS",
            "INSTANT_CHANNELS", "LAG_STEPS", "FEATURE_SCALES", "TRAIN_SEED_OFFSET", "feature_names", "theta_rows"]
@@ -141,7 +142,7 @@ class ARSPolicy:
         if (self.feature_set in PREDICTED) != (predictor is not None):
             raise ValueError(f"ARSPolicy: feature set {self.feature_set!r} "
                              + ("needs a predictor (agents/predictor.py)" if predictor is None else "has no predictor"))
-        _check_predictor_channels(predictor, "ARSPolicy")
+        check_channels(predictor, PRED_CHANNELS, "ARSPolicy")
         self.predictor = predictor
         self.theta = {k: np.asarray(v, float) for k, v in theta.items()}
         nf = n_features(self.feature_set)
@@ -200,16 +201,6 @@ def _extra_single(reader, obs, name):
     return float(np.asarray(v).reshape(-1)[0])
 
 
-def _check_predictor_channels(predictor, what: str) -> None:
-    """ValueError unless ``predictor`` (if any) reads the WinchPayout predictor's channels (not the compensator's)."""
-    if predictor is None:
-        return
-    from .predictor import PRED_CHANNELS
-    if tuple(predictor.channels) != PRED_CHANNELS:
-        raise ValueError(f"{what}: the predictor reads {list(predictor.channels)}, not the WinchPayout predictor's "
-                         f"{list(PRED_CHANNELS)} (fit it with python -m agents.predictor, default --env)")
-
-
 def features_single(reader, obs, scales, hist, feature_set: str = "v1", predictor=None, pkey=None):
     """φ of one observation given the history ring ``hist`` ((3, N_HISTORY), newest first; None at episode start:
     filled with the first observation; for a feature set with :data:`LONG_HISTORY` or a predictor (:data:`PREDICTED`;
@@ -238,7 +229,6 @@ def features_single(reader, obs, scales, hist, feature_set: str = "v1", predicto
         phi.append(np.concatenate([lring[i, list(lags)] for i, (_c, lags) in enumerate(long)]))
         ring = (ring, lring)
     if pred:
-        from .predictor import PRED_CHANNELS, push
         x = predictor.sample([[reader(obs, c) for c in PRED_CHANNELS]])
         lring = push(None if lring is None else lring[None], x, lring is None)[0]
         phi.append(predictor.predict(lring[None], [pkey])[0])
@@ -255,7 +245,7 @@ class _Batch:
         if (feature_set in PREDICTED) != (predictor is not None):
             raise ValueError(f"feature set {feature_set!r} " + ("needs a predictor (agents/predictor.py)"
                                                                 if predictor is None else "has no predictor"))
-        _check_predictor_channels(predictor, "ARS training")
+        check_channels(predictor, PRED_CHANNELS, "ARS training")
         self.predictor = predictor
         self.reader = ObsReader(venv.envs[0])
         _require_channels(self.reader, feature_set, "ARS training")
@@ -311,7 +301,6 @@ class _Batch:
             parts.append(np.concatenate([self.lring[:, i, list(lags)] for i, (_c, lags) in enumerate(self.long)],
                                         axis=1))
         if self.predictor is not None:
-            from .predictor import PRED_CHANNELS, push
             x = self.predictor.sample(np.stack([self.ch(obs, c) for c in PRED_CHANNELS], axis=1))
             self.pring = push(getattr(self, "pring", None), x, first)
             parts.append(self.predictor.predict(self.pring, self.pkeys))
@@ -506,15 +495,7 @@ def load_ars_policy(path: str | Path) -> ARSPolicy:
         return feature_names(fs)
     theta, table, scales, meta = read_ars_file(path, names_for, {"env_id": ENV_ID, "algo": "ars"},
                                                "an ARS along-cable-residual policy")
-    predictor = None
-    if meta.get("feature_set") in PREDICTED:
-        from .predictor import Predictor
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                predictor = Predictor.from_arrays(z)
-        except (KeyError, ValueError) as exc:
-            raise ValueError(f"{path}: feature set {meta['feature_set']!r} but no readable predictor in the file "
-                             f"({type(exc).__name__}: {exc})") from None
+    predictor = from_policy_file(path, meta["feature_set"]) if meta.get("feature_set") in PREDICTED else None
     return ARSPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 

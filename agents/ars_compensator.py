@@ -69,6 +69,8 @@ from pathlib import Path
 import numpy as np
 
 from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset_copies, save_ars_file
+from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, push
+from .predictor import feature_names as predicted_names
 
 __all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
@@ -122,7 +124,6 @@ def feature_names(feature_set: str = "h") -> list[str]:
         raise ValueError(f"unknown compensator feature set {feature_set!r} (known: {', '.join(FEATURE_SETS)})")
     pred = []
     if feature_set in PREDICTED:
-        from .predictor import COMP_PRED_CHANNELS, feature_names as predicted_names
         pred = predicted_names(COMP_PRED_CHANNELS)
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
             + list(NONLINEAR) + pred + ["const"])
@@ -143,11 +144,7 @@ def _check_predictor(feature_set: str, predictor, what: str) -> None:
         raise ValueError(f"{what}: feature set {feature_set!r} " + (
             "needs a predictor (python -m agents.predictor --env towenv/CompensatorGains-v0)" if predictor is None
             else "has no predictor"))
-    if predictor is not None:
-        from .predictor import COMP_PRED_CHANNELS
-        if tuple(predictor.channels) != COMP_PRED_CHANNELS:
-            raise ValueError(f"{what}: the predictor reads {list(predictor.channels)}, not the compensator's "
-                             f"{list(COMP_PRED_CHANNELS)} (fit it with --env towenv/CompensatorGains-v0)")
+    check_channels(predictor, COMP_PRED_CHANNELS, what)
 
 
 def _train_seed(base_seed: int, iteration: int, seed: int) -> int:
@@ -191,7 +188,6 @@ class _Features:
         cols = inst + [nl[k] / sc[k] for k in NONLINEAR]
         parts = [lagged, np.stack(cols, axis=1)]
         if self.predictor is not None:
-            from .predictor import push
             p = self.predictor
             x = p.sample(np.stack([r.batch(obs, c) for c in p.channels], axis=1))
             self.pring = push(self.pring, x, first or self.pring is None)
@@ -624,15 +620,8 @@ def load_policy(path: str | Path) -> ARSCompensatorPolicy:
         return feature_names(fs)
     theta, table, scales, meta = read_ars_file(path, names_for, {"env_id": ENV_ID, "algo": ALGO},
                                                "an ARS skyhook-residual policy")
-    predictor = None
-    if (meta.get("feature_set") or "h") in PREDICTED:
-        from .predictor import Predictor
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                predictor = Predictor.from_arrays(z)
-        except (KeyError, ValueError) as exc:
-            raise ValueError(f"{path}: feature set {meta['feature_set']!r} but no readable predictor in the file "
-                             f"({type(exc).__name__}: {exc})") from None
+    fs = meta.get("feature_set") or "h"
+    predictor = from_policy_file(path, fs) if fs in PREDICTED else None
     return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COMPENSATOR_ID", "WINCH_ID", "ObsReader", "sea_key", "sea_label", "nearest_key", "env_kind",
+__all__ = ["weights_by_name", "COMPENSATOR_ID", "WINCH_ID", "ObsReader", "sea_key", "sea_label", "nearest_key", "env_kind",
            "short_env_name"]
 
 COMPENSATOR_ID = "towenv/CompensatorGains-v0"
@@ -113,6 +113,24 @@ def reset_copies(venv, seas, seeds):
         mask[i] = True
         obs, _ = venv.reset(seed=seeds, options={"sea_state": seas[i], "sea_seed": seeds[i], "reset_mask": mask})
     return obs
+
+
+def weights_by_name(init_theta: dict, keys, init_names: list, names: list, lead: tuple = ()) -> np.ndarray:
+    """Weights (len(keys), *lead, len(names)) for the feature list ``names``, copied by feature name from
+    ``init_theta`` (sea-state key -> (*lead, len(init_names)) array; None: all zeros); features ``init_names`` lacks
+    start at 0. ValueError naming the sea states ``init_theta`` has no weights for (a warm start of the linear
+    residual searches, agents/gn.py and agents/gn_compensator.py)."""
+    theta = np.zeros((len(keys),) + tuple(lead) + (len(names),))
+    if init_theta is None:
+        return theta
+    missing = [k for k in keys if k not in init_theta]
+    if missing:
+        raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
+    cols = [(i, init_names.index(nm)) for i, nm in enumerate(names) if nm in init_names]
+    dst, src = [i for i, _ in cols], [j for _, j in cols]
+    for c, k in enumerate(keys):
+        theta[c][..., dst] = np.asarray(init_theta[k], float)[..., src]
+    return theta
 
 
 def save_ars_file(path, theta: dict, base_table: dict, scales: dict, meta: dict, extra: dict | None = None):

@@ -54,18 +54,9 @@ def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = Fa
 def initial_theta(init, keys, feature_set: str) -> np.ndarray:
     """θ (len(keys), n_features(feature_set)) to start from: zeros (the along-cable law), or ``init``'s weights copied
     by feature name (features ``init`` does not have start at 0)."""
-    theta = np.zeros((len(keys), ars.n_features(feature_set)))
-    if init is None:
-        return theta
-    names, inames = ars.feature_names(feature_set), ars.feature_names(init.feature_set)
-    missing = [k for k in keys if k not in init.theta]
-    if missing:
-        raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
-    for c, k in enumerate(keys):
-        for i, nm in enumerate(names):
-            if nm in inames:
-                theta[c, i] = init.theta[k][inames.index(nm)]
-    return theta
+    from .common import weights_by_name
+    return weights_by_name(None if init is None else init.theta, keys,
+                           None if init is None else ars.feature_names(init.feature_set), ars.feature_names(feature_set))
 
 
 def check_settings(iterations, eps, ridges, replicates, episode_seconds, discard, max_iterations=MAX_ITERATIONS):

@@ -60,18 +60,10 @@ def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = Fa
 def initial_theta(init, keys, feature_set: str) -> np.ndarray:
     """Θ (len(keys), 2, n_features(feature_set)) to start from: zeros (skyhook), or ``init``'s weights copied by
     feature name (features ``init`` does not have start at 0)."""
-    theta = np.zeros((len(keys), arc.N_ACT, arc.n_features(feature_set)))
-    if init is None:
-        return theta
-    missing = [k for k in keys if k not in init.theta]
-    if missing:
-        raise ValueError(f"init: the initial policy has no weights for sea states {missing}")
-    names, inames = arc.feature_names(feature_set), arc.feature_names(init.feature_set)
-    cols = [(i, inames.index(nm)) for i, nm in enumerate(names) if nm in inames]
-    for c, k in enumerate(keys):
-        for i, j in cols:
-            theta[c, :, i] = init.theta[k][:, j]
-    return theta
+    from .common import weights_by_name
+    return weights_by_name(None if init is None else init.theta, keys,
+                           None if init is None else arc.feature_names(init.feature_set),
+                           arc.feature_names(feature_set), (arc.N_ACT,))
 
 
 def free_mask(feature_set: str, free: str) -> np.ndarray:

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Predictor", "fit_predictor", "predictor_seed", "LEADS", "PRED_CHANNELS", "COMP_PRED_CHANNELS",
+__all__ = ["Predictor", "fit_predictor", "predictor_seed", "check_channels", "from_policy_file", "push", "LEADS", "PRED_CHANNELS", "COMP_PRED_CHANNELS",
            "PRED_LAGS", "PREDICTOR_SEED_OFFSET", "main"]
 
 #: prediction leads in control steps (0.2 … 2.0 s ahead)
@@ -131,6 +131,26 @@ class Predictor:
             m = keys == k
             out[m] = X[m] @ self.W[str(k)]
         return out
+
+
+def check_channels(predictor, expected, what: str) -> None:
+    """ValueError unless ``predictor`` (if any) reads the channels ``expected`` (a value of :data:`CHANNELS_BY_ENV`),
+    naming both lists: a policy class accepts only the predictor of its own environment."""
+    if predictor is not None and tuple(predictor.channels) != tuple(expected):
+        env = next(k for k, v in CHANNELS_BY_ENV.items() if v == tuple(expected))
+        raise ValueError(f"{what}: the predictor reads {list(predictor.channels)}, not the {env} predictor's "
+                         f"{list(expected)} (fit it with python -m agents.predictor --env {env})")
+
+
+def from_policy_file(path, feature_set: str) -> "Predictor":
+    """The predictor stored in a policy file of a predicted feature set; ValueError naming the file if it has none
+    that can be read."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return Predictor.from_arrays(z)
+    except (KeyError, ValueError) as exc:
+        raise ValueError(f"{path}: feature set {feature_set!r} but no readable predictor in the file "
+                         f"({type(exc).__name__}: {exc})") from None
 
 
 def shared_predictor(policies):

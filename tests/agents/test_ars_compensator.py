@@ -262,10 +262,10 @@ def test_predicted_feature_set_round_trip_zero_start_and_refusals(tmp_path, env)
         AC.ARSCompensatorPolicy(h.theta, h.base_table, meta={"feature_set": "v2q"})
     from pathlib import Path
     winch = Predictor.load(Path(AC.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
-    with pytest.raises(ValueError, match="not the compensator's"):
+    with pytest.raises(ValueError, match="not the towenv/CompensatorGains-v0 predictor's"):
         AC.ARSCompensatorPolicy(theta, h.base_table, meta={"feature_set": "hq"}, predictor=winch)
     wtable = load_tuned()["along_cable"]               # and the WinchPayout class refuses the compensator's predictor
-    with pytest.raises(ValueError, match="not the WinchPayout predictor's"):
+    with pytest.raises(ValueError, match="not the towenv/WinchPayout-v0 predictor's"):
         ars.ARSPolicy({k: np.zeros(ars.n_features("v2q")) for k in wtable}, wtable, feature_set="v2q",
                       predictor=_predictor())
 

@@ -370,3 +370,24 @@ def test_residual_split_probe_separates_the_predicted_part():
     assert any(np.any(p > 0) for p, _r in res.values())          # the search moved some predicted weights
     with pytest.raises(ValueError, match="need hq"):
         script.residual_split(base / "gn_CompensatorGains-v0_s1.npz", episode_seconds=64.0)
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["--features", "hq"], "needs a predictor"),
+    (["--free", "predicted"], "free='predicted' needs"),
+    (["--predictor", "no/such/predictor.npz"], "--predictor: no/such/predictor.npz: not a predictor file"),
+    (["--features", "hq", "--predictor", "WINCH"], "not the towenv/CompensatorGains-v0 predictor's"),
+    (["--features", "hq", "--predictor", "COMP", "--entries", "12"], "entries must be indices in 0..11"),
+])
+def test_cli_refuses_bad_preview_options_naming_the_field(argv, msg, capsys):
+    """Bad feature-set / predictor / free / entries options end in a usage error (exit 2) naming the field, before
+    any episode runs."""
+    import agents
+    trained = Path(agents.__file__).parent / "trained"
+    files = {"WINCH": str(trained / "predictor_WinchPayout-v0.npz"),
+             "COMP": str(trained / "predictor_CompensatorGains-v0.npz")}
+    argv = [files.get(x, x) for x in argv]
+    with pytest.raises(SystemExit) as ex:
+        gnc.main(argv + ["--iterations", "1"])
+    assert ex.value.code == 2
+    assert msg in capsys.readouterr().err
