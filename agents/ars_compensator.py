@@ -23,7 +23,9 @@ normalised by the rewards' standard deviation) with an explicit end-stop penalty
 These 45 features are feature set ``"h"`` (files without a feature set are "h"). Feature set ``"hq"`` adds, before the
 constant, the tow point's vertical velocity, acceleration and heave 0.2, 0.4, …, 2.0 s *ahead* as predicted by a causal
 linear predictor from the last 10 s of the MRU's vertical motion (``agents/predictor.py``, stored in the policy file;
-75 features). On the evaluation set it did not beat "h" (docs/agents.md).
+75 features). On the evaluation set it did not beat "h" (docs/agents.md). Feature set ``"hs"`` adds a copy of every "h"
+feature (the constant included) multiplied by skyhook's switching state (1 while the base law damps, ż_abs·ṡ > 0, else
+0; :func:`skyhook_on`): separate residual weights for the damping-on and damping-off phases (90 features).
 
 Θ = 0 is the skyhook law exactly. The policy is causal: it acts on the observation vector and its own memory of
 earlier observations, plus the sea-state estimate at episode start (as the base does).
@@ -72,7 +74,7 @@ from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset
 from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, push
 from .predictor import feature_names as predicted_names
 
-__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
+__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
            "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
            "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "entry_hit_weights", "parse_hit_weights",
@@ -115,8 +117,14 @@ N_ACT = 2
 #: predicted by the policy's own causal linear predictor from the last 10 s of the MRU's vertical motion
 #: (``agents/predictor.py``, :data:`agents.predictor.COMP_PRED_CHANNELS`, stored in the policy file), scaled as the
 #: channel's history features, placed before the constant
-FEATURE_SETS = ("h", "hq")
+FEATURE_SETS = ("h", "hq", "hs")
 PREDICTED = frozenset({"hq"})
+#: feature set "hs" = "h" + every "h" feature (the constant included) multiplied by skyhook's switching state
+#: ``on`` = 1 while the sheave's absolute velocity has the stroke velocity's sign (skyhook damps; the same condition
+#: as the base law, read from the same observation), else 0: a residual with separate weights for the damping-on and
+#: damping-off phases (90 features; the gated names are prefixed ``on*``)
+GATED = frozenset({"hs"})
+GATE_PREFIX = "on*"
 
 
 def feature_names(feature_set: str = "h") -> list[str]:
@@ -125,8 +133,11 @@ def feature_names(feature_set: str = "h") -> list[str]:
     pred = []
     if feature_set in PREDICTED:
         pred = predicted_names(COMP_PRED_CHANNELS)
-    return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
-            + list(NONLINEAR) + pred + ["const"])
+    names = ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
+             + list(NONLINEAR) + pred + ["const"])
+    if feature_set in GATED:
+        names += [GATE_PREFIX + nm for nm in names]
+    return names
 
 
 #: features of feature set "h" (the policies without a feature set in their metadata)
@@ -158,9 +169,10 @@ class _Features:
     """φ for a batch of observations ``(n, obs_size)`` with the history ring of every row. The single-environment
     policy uses it with n = 1, so training and deployment share one arithmetic."""
 
-    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None):
+    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gated: bool = False):
         self.reader = reader
         self.half = float(half_stroke)
+        self.gated = bool(gated)
         self.scales = dict(scales)
         self.hist = None
         self.predictor = predictor
@@ -193,7 +205,19 @@ class _Features:
             self.pring = push(self.pring, x, first or self.pring is None)
             parts.append(p.predict(self.pring, self.pkeys))
         parts.append(np.ones((n, 1)))
-        return np.concatenate(parts, axis=1)
+        phi = np.concatenate(parts, axis=1)
+        if self.gated:
+            phi = np.concatenate([phi, phi * skyhook_on(r, obs)[:, None]], axis=1)
+        return phi
+
+
+def skyhook_on(reader, obs):
+    """Skyhook's switching state per row of a batch of observations (1.0 where the law damps, else 0.0): the sheave's
+    absolute velocity ż_abs = tow_vel_z + comp_stroke_vel has the stroke velocity's sign, and |ṡ| > 1e-6 — the
+    condition of ``classical.SkyhookCompensator`` and :meth:`_Batch.base_action`."""
+    sd = reader.batch(obs, "comp_stroke_vel")
+    z_abs = reader.batch(obs, "tow_vel_z") + sd
+    return ((z_abs * sd > 0.0) & (np.abs(sd) > 1e-6)).astype(float)
 
 
 def _residual(theta, phi):
@@ -292,7 +316,8 @@ class ARSCompensatorPolicy:
         self.base = SkyhookCompensator(env, table=self.base_table)
         self.reader = self.base.reader
         self.u = env.unwrapped
-        self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor)
+        self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor,
+                                gated=self.feature_set in GATED)
         self._th = None
         return self
 
@@ -344,7 +369,7 @@ class _Batch:
         self.kmap, self.bmap = e0.stiffness_range, e0.damping_range
         self.table = base_table
         self.feature_set = feature_set
-        self.features = _Features(self.reader, e0.half_stroke, scales, predictor)
+        self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gated=feature_set in GATED)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS

@@ -19,7 +19,8 @@ Per iteration:
 
 Options: ``feature_set="hq"`` with a ``predictor`` (the init's weights copied by feature name, the predicted ones
 starting at 0), and ``free="predicted"`` to move only the predicted features' weights (the Jacobian then has one column
-per moved weight).
+per moved weight); ``feature_set="hs"`` (the skyhook-gated copy of the features, starting at 0) with ``free="gated"``
+moves only the gated copy's weights.
 
 The result is an :class:`agents.ars_compensator.ARSCompensatorPolicy` (same features, stop guard and file format,
 ``meta["method"] = "gauss-newton"``), so ``scripts/evaluate.py`` loads it unchanged. It starts from Θ = 0 (skyhook)
@@ -78,8 +79,13 @@ def free_mask(feature_set: str, free: str) -> np.ndarray:
             raise ValueError(f"free='predicted' needs a feature set with predicted features "
                              f"({', '.join(sorted(arc.PREDICTED))}; got {feature_set!r})")
         cols = np.array([nm.endswith("(pred)") for nm in names])
+    elif free == "gated":
+        if feature_set not in arc.GATED:
+            raise ValueError(f"free='gated' needs a feature set with gated features "
+                             f"({', '.join(sorted(arc.GATED))}; got {feature_set!r})")
+        cols = np.array([nm.startswith(arc.GATE_PREFIX) for nm in names])
     else:
-        raise ValueError(f"free must be 'all' or 'predicted' (got {free!r})")
+        raise ValueError(f"free must be 'all', 'predicted' or 'gated' (got {free!r})")
     return np.tile(cols, arc.N_ACT)
 
 
@@ -266,11 +272,13 @@ def main(argv=None) -> int:
     ap.add_argument("--init", default=None, help="start from this ARS/GN compensator policy file")
     ap.add_argument("--features", default=None, choices=arc.FEATURE_SETS,
                     help="feature set (default: the init policy's, else h); hq adds the predicted tow-point motion "
-                         "and needs --predictor (or an hq init)")
+                         "and needs --predictor (or an hq init); hs adds every h feature gated by skyhook's "
+                         "switching state")
     ap.add_argument("--predictor", default=None, help="predictor file of feature set hq (python -m agents.predictor "
                                                       "--env towenv/CompensatorGains-v0 --out FILE)")
-    ap.add_argument("--free", default="all", choices=("all", "predicted"),
-                    help="which weights the search moves: all (default), or only the predicted features' (hq)")
+    ap.add_argument("--free", default="all", choices=("all", "predicted", "gated"),
+                    help="which weights the search moves: all (default), only the predicted features' (hq), or only "
+                         "the skyhook-gated copy's (hs)")
     ap.add_argument("--entries", type=int, nargs="+", default=None,
                     help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")

@@ -1,11 +1,13 @@
-"""How much of an ``hq`` compensator policy's residual comes from its predicted features (issue 14 probe).
+"""How much of an ``hq`` or ``hs`` compensator policy's residual comes from its added features (issue 14 probe).
 
-For each policy file (feature set hq, ``agents/ars_compensator.py``), runs the evaluation entries 0, 1, 4, 5, 8, 9
-(two headings of each coastal code 3 / 4 / 5, evaluation wave seeds) on one batched environment, exactly as the
-policy acts (skyhook + Θ·φ, clipped, stop guard), and splits the residual Θ·φ into the predicted features' part and
-the rest; prints the RMS of each per sea state over t ≥ ``discard`` in action units (log-stiffness, log-damping):
+For each policy file (feature set hq or hs, ``agents/ars_compensator.py``), runs the evaluation entries 0, 1, 4, 5, 8,
+9 (two headings of each coastal code 3 / 4 / 5, evaluation wave seeds) on one batched environment, exactly as the
+policy acts (skyhook + Θ·φ, clipped, stop guard), and splits the residual Θ·φ into the added features' part (hq: the
+predicted features; hs: the skyhook-gated copy) and the rest; prints the RMS of each per sea state over t ≥
+``discard`` in action units (log-stiffness, log-damping):
 
     python scripts/probe_residual_split.py agents/trained/gnq_CompensatorGains-v0_s{0,1,2}.npz
+    python scripts/probe_residual_split.py agents/trained/gns_CompensatorGains-v0_s{0,1,2}.npz
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ ENTRIES = (0, 1, 4, 5, 8, 9)
 
 
 def residual_split(policy_file, episode_seconds=None, discard: float = 60.0) -> dict:
-    """{WMO code: (RMS of the predicted part (2,), RMS of the other part (2,))} for one hq policy file."""
+    """{WMO code: (RMS of the added features' part (2,), RMS of the other part (2,))} for one hq or hs policy file."""
     import gymnasium as gym
 
     import towenv  # noqa: F401  (registers the ids)
@@ -25,9 +27,13 @@ def residual_split(policy_file, episode_seconds=None, discard: float = 60.0) -> 
     from agents import ars_compensator as arc
     from agents.common import nearest_key, reset_copies
     pol = arc.load_policy(policy_file)
-    if pol.feature_set not in arc.PREDICTED:
-        raise ValueError(f"{policy_file}: feature set {pol.feature_set!r} has no predicted features (need hq)")
-    pm = np.array([n.endswith("(pred)") for n in arc.feature_names(pol.feature_set)])
+    names = arc.feature_names(pol.feature_set)
+    if pol.feature_set in arc.PREDICTED:
+        pm = np.array([n.endswith("(pred)") for n in names])
+    elif pol.feature_set in arc.GATED:
+        pm = np.array([n.startswith(arc.GATE_PREFIX) for n in names])
+    else:
+        raise ValueError(f"{policy_file}: feature set {pol.feature_set!r} has no added features (need hq or hs)")
     ev = gym.make(arc.ENV_ID).unwrapped.eval_sea_states()
     ents = [ev[i] for i in ENTRIES]
     kw = {} if episode_seconds is None else {"episode_seconds": float(episode_seconds)}
@@ -57,9 +63,14 @@ def residual_split(policy_file, episode_seconds=None, discard: float = 60.0) -> 
     return out
 
 
+def arc_set(policy_file) -> str:
+    from agents import ars_compensator as arc
+    return arc.load_policy(policy_file).feature_set
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("policies", nargs="+", help="hq compensator policy files (.npz)")
+    ap.add_argument("policies", nargs="+", help="hq or hs compensator policy files (.npz)")
     ap.add_argument("--episode-seconds", type=float, default=None, help="episode length (default: the environment's)")
     ap.add_argument("--discard", type=float, default=60.0, help="start-up window left out (s)")
     a = ap.parse_args(argv)
@@ -68,8 +79,9 @@ def main(argv=None) -> int:
             res = residual_split(f, a.episode_seconds, a.discard)
         except ValueError as exc:
             ap.error(str(exc))
+        part = "predicted" if arc_set(f) == "hq" else "gated"
         for code, (p, r) in res.items():
-            print(f"{f}: code {code}: RMS residual (log-stiffness, log-damping): predicted part "
+            print(f"{f}: code {code}: RMS residual (log-stiffness, log-damping): {part} part "
                   f"{p[0]:.3f} / {p[1]:.3f}, other features {r[0]:.3f} / {r[1]:.3f}", flush=True)
     return 0
 

@@ -73,11 +73,12 @@ def test_zero_weights_are_the_skyhook_law(env):
         assert np.array_equal(a.data[k], b.data[k]), k
 
 
-@pytest.mark.parametrize("fs", ["h", "hq"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, fs):
     """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ, the
     same end-stop hits and the same stroke-margin term (from the ``comp_stroke`` observation, which is the true
-    stroke / half stroke of the simulator to float32 precision); with the predicted features too (hq)."""
+    stroke / half stroke of the simulator to float32 precision); with the predicted features too (hq) and the
+    skyhook-gated copy (hs)."""
     from towenv.envs.vector import CompensatorGainsVectorEnv
     pol = _policy(scale=0.05, fs=fs).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
@@ -168,7 +169,7 @@ def test_stop_guard_acts_exactly_where_its_condition_holds(env):
         AC.ARSCompensatorPolicy({}, table, meta={"stop_guard": 1.5})
 
 
-@pytest.mark.parametrize("fs", ["h", "hq"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs"])
 def test_policy_is_causal(env, fs):
     """Actions depend only on the observations handed to predict() (and the sea-state estimate): a replay of the
     recorded observations to a fresh policy bound to an env in an unrelated state gives the same actions, and
@@ -390,3 +391,45 @@ def test_committed_policies_ship_load_and_act(env, seed):
     assert acts.shape[0] == env.unwrapped.max_steps and np.all(np.isfinite(acts))
     assert np.all(np.abs(acts) <= 1.0)
     assert not np.allclose(acts[0], sky[0], atol=1e-3)
+
+
+def test_gated_feature_set_switches_with_skyhook(env):
+    """hs = h + every h feature times skyhook's switching state. Independently of the feature code: with the gated
+    weights at 0 the policy acts as its h policy (to round-off), and with gated weights = −(the h weights) the
+    residual vanishes exactly on the steps where skyhook damps (ż_abs·ṡ > 0 and |ṡ| > 1e-6, computed here in float64
+    from the observation) — the action is then skyhook's — and is the h policy's on the others."""
+    from agents.classical import SkyhookCompensator
+    names, hs_names = AC.feature_names("h"), AC.feature_names("hs")
+    assert hs_names[:len(names)] == names and hs_names[len(names):] == [AC.GATE_PREFIX + n for n in names]
+    h = _policy(scale=0.05, seed=8)
+    zero = {k: np.concatenate([v, np.zeros_like(v)], axis=1) for k, v in h.theta.items()}
+    cancel = {k: np.concatenate([v, -v], axis=1) for k, v in h.theta.items()}
+    g0 = AC.ARSCompensatorPolicy(zero, h.base_table, meta={"feature_set": "hs"})
+    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hs"})
+    sea, seed = env.unwrapped.eval_sea_states()[8]
+    a_h = _actions(env, h.bind_env(env), sea, seed, 200)
+    np.testing.assert_allclose(_actions(env, g0.bind_env(env), sea, seed, 200), a_h, rtol=0, atol=1e-6)
+    gc.bind_env(env)
+    sky = SkyhookCompensator(env, table=h.base_table)
+    h.bind_env(env)
+    r = gc.reader
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    n_on = n_off = 0
+    for k in range(200):
+        first = np.array([k == 0])
+        if k == 0:
+            sky.reset()
+        a_sky = np.asarray(sky.act(np.asarray(obs, float)), np.float32)
+        a_h1, _ = h.predict(obs, episode_start=first)
+        a_c, _ = gc.predict(obs, episode_start=first)
+        sd = float(r(obs, "comp_stroke_vel"))
+        on = (float(r(obs, "tow_vel_z")) + sd) * sd > 0.0 and abs(sd) > 1e-6
+        if on:
+            n_on += 1
+            np.testing.assert_allclose(a_c, np.clip(a_sky, -1, 1), rtol=0, atol=1e-6)
+        else:
+            n_off += 1
+            np.testing.assert_allclose(a_c, a_h1, rtol=0, atol=1e-6)
+        obs, _r, term, trunc, _ = env.step(a_c)
+        assert not (term or trunc)
+    assert n_on > 20 and n_off > 20                     # both phases were exercised
