@@ -107,6 +107,12 @@ def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
         gnc.free_mask("h", "predicted")
     with pytest.raises(ValueError, match="free must be"):
         gnc.free_mask("hq", "some")
+    gated = gnc.free_mask("hs", "gated")                # hs: only the skyhook-gated copy moves
+    hs_names = arc.feature_names("hs")
+    assert gated.sum() == arc.N_ACT * 45 and all(
+        hs_names[i % len(hs_names)].startswith(arc.GATE_PREFIX) == bool(m) for i, m in enumerate(gated))
+    with pytest.raises(ValueError, match="free='gated' needs"):
+        gnc.free_mask("hq", "gated")
     with pytest.raises(ValueError, match="needs a predictor"):
         gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
@@ -339,6 +345,28 @@ def test_predicted_preview_policies_carry_their_recipe_and_act(seed):
     _assert_acts_in_box_and_unlike(pol, init)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_skyhook_gated_policies_carry_their_recipe_and_act(seed):
+    """The compensator policies with the skyhook-gated copy of the features (``gns``, feature set hs, docs/agents.md)
+    are package data, record their recipe (4 iterations from 6 on, 2 replicates, ridges 0.01…100, only the gated
+    copy's weights moved, from the ``gn`` file of the same seed), keep every ``gn`` weight exactly (the ungated copy),
+    moved some gated weights, and act inside the action box, not as ``gn`` does."""
+    import agents
+    base = Path(agents.__file__).parent / "trained"
+    pol = arc.load_policy(base / f"gns_CompensatorGains-v0_s{seed}.npz")
+    init = arc.load_policy(base / f"gn_CompensatorGains-v0_s{seed}.npz")
+    hp = pol.meta["hyperparameters"]
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == "hs"
+    assert pol.meta["first_iteration"] == 6 and pol.meta["iterations"] == 4 and pol.predictor is None
+    assert (hp["replicates"], hp["ridges"], hp["init"], hp["free"]) == (
+        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"gn_CompensatorGains-v0_s{seed}", "gated")
+    nh = arc.n_features("h")
+    assert all(np.array_equal(pol.theta[k][:, :nh], init.theta[k]) for k in init.theta)
+    assert any(np.any(pol.theta[k][:, nh:] != 0) for k in pol.theta)
+    assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
+    _assert_acts_in_box_and_unlike(pol, init)
+
+
 def test_predictor_fit_seeds_are_disjoint_from_every_other_set():
     """The predictors' fitting episodes (WinchPayout and CompensatorGains: the same values) (agents/predictor.py, +97000 + 10·replicate) are never an
     evaluation, final, tuning, validation, ARS, probe, Gauss–Newton (winch or compensator) or teacher seed, value by
@@ -359,7 +387,8 @@ def test_predictor_fit_seeds_are_disjoint_from_every_other_set():
 def test_residual_split_probe_separates_the_predicted_part():
     """scripts/probe_residual_split.py: on a committed hq policy it reports, per sea state, a finite RMS of the
     predicted features' part of the residual (non-zero somewhere: the search moved some of those weights) and a
-    non-zero one of the rest (the gn weights); a policy without predicted features is refused naming the set."""
+    non-zero one of the rest (the gn weights); the same for the gated copy of a committed hs policy; a policy without
+    added features is refused naming the sets."""
     import agents
     script = load_script("probe_residual_split")
     base = Path(agents.__file__).parent / "trained"
@@ -368,7 +397,9 @@ def test_residual_split_probe_separates_the_predicted_part():
     for p, r in res.values():
         assert p.shape == r.shape == (2,) and np.all(np.isfinite(p)) and np.all(r > 0)
     assert any(np.any(p > 0) for p, _r in res.values())          # the search moved some predicted weights
-    with pytest.raises(ValueError, match="need hq"):
+    gated = script.residual_split(base / "gns_CompensatorGains-v0_s1.npz", episode_seconds=64.0, discard=60.0)
+    assert sorted(gated) == [3, 4, 5] and any(np.any(p > 0) for p, _r in gated.values())
+    with pytest.raises(ValueError, match="need hq or hs"):
         script.residual_split(base / "gn_CompensatorGains-v0_s1.npz", episode_seconds=64.0)
 
 
