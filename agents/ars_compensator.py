@@ -74,7 +74,8 @@ from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset
 from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, push
 from .predictor import feature_names as predicted_names
 
-__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
+__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "ADDED_KINDS", "added_features",
+           "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
            "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
            "DEFAULT_MARGIN_START", "margin_penalty", "stop_guard_mask", "entry_hit_weights", "parse_hit_weights",
@@ -125,6 +126,8 @@ PREDICTED = frozenset({"hq"})
 #: damping-off phases (90 features; the gated names are prefixed ``on*``)
 GATED = frozenset({"hs"})
 GATE_PREFIX = "on*"
+#: the kinds of features a feature set adds to "h", and the sets that add them
+ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED}
 
 
 def feature_names(feature_set: str = "h") -> list[str]:
@@ -142,6 +145,17 @@ def feature_names(feature_set: str = "h") -> list[str]:
 
 #: features of feature set "h" (the policies without a feature set in their metadata)
 N_FEATURES = len(feature_names())
+
+
+def added_features(feature_set: str) -> tuple[str, np.ndarray]:
+    """(kind, mask) of the features ``feature_set`` adds to "h": kind "predicted" (hq: the predicted tow-point
+    motion), "gated" (hs: the skyhook-gated copy) or "" (h), and a boolean mask over ``feature_names(feature_set)``."""
+    names = feature_names(feature_set)
+    if feature_set in PREDICTED:
+        return "predicted", np.array([nm.endswith("(pred)") for nm in names])
+    if feature_set in GATED:
+        return "gated", np.array([nm.startswith(GATE_PREFIX) for nm in names])
+    return "", np.zeros(len(names), bool)
 
 
 def n_features(feature_set: str = "h") -> int:

@@ -298,13 +298,8 @@ def main(argv=None) -> int:
             init = ars.load_ars_policy(a.init)
         except (OSError, ValueError, KeyError) as e:
             ap.error(f"--init: {e}")
-    predictor = None
-    if a.predictor:
-        from .predictor import Predictor
-        try:
-            predictor = Predictor.load(a.predictor)
-        except ValueError as e:
-            ap.error(f"--predictor: {e}")
+    from .predictor import load_option
+    predictor = load_option(ap, a.predictor)
     out = Path(a.export or default_export(a.seed, a.features))
     try:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight,

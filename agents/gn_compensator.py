@@ -68,22 +68,17 @@ def initial_theta(init, keys, feature_set: str) -> np.ndarray:
 
 
 def free_mask(feature_set: str, free: str) -> np.ndarray:
-    """Which of the (2, n_features) weights the search moves: ``"all"``, or ``"predicted"`` (only the predicted
-    features' weights of a :data:`agents.ars_compensator.PREDICTED` feature set; the rest stay as they start), as a
-    flat boolean mask over the 2 × n_features weights (row-major, as Θ.reshape(-1))."""
-    names = arc.feature_names(feature_set)
+    """Which of the (2, n_features) weights the search moves: ``"all"``, or only the features a feature set adds to
+    "h" (:func:`agents.ars_compensator.added_features`): ``"predicted"`` (hq) or ``"gated"`` (hs); the rest stay as
+    they start. A flat boolean mask over the 2 × n_features weights (row-major, as Θ.reshape(-1))."""
+    kind, added = arc.added_features(feature_set)
     if free == "all":
-        cols = np.ones(len(names), bool)
-    elif free == "predicted":
-        if feature_set not in arc.PREDICTED:
-            raise ValueError(f"free='predicted' needs a feature set with predicted features "
-                             f"({', '.join(sorted(arc.PREDICTED))}; got {feature_set!r})")
-        cols = np.array([nm.endswith("(pred)") for nm in names])
-    elif free == "gated":
-        if feature_set not in arc.GATED:
-            raise ValueError(f"free='gated' needs a feature set with gated features "
-                             f"({', '.join(sorted(arc.GATED))}; got {feature_set!r})")
-        cols = np.array([nm.startswith(arc.GATE_PREFIX) for nm in names])
+        cols = np.ones(len(added), bool)
+    elif free in arc.ADDED_KINDS:
+        if kind != free:
+            raise ValueError(f"free={free!r} needs a feature set with {free} features "
+                             f"({', '.join(sorted(arc.ADDED_KINDS[free]))}; got {feature_set!r})")
+        cols = added
     else:
         raise ValueError(f"free must be 'all', 'predicted' or 'gated' (got {free!r})")
     return np.tile(cols, arc.N_ACT)
@@ -111,8 +106,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     ``stop_guard``: None = the init's (0 without init). ``entries``: indices into the evaluation (sea state,
     heading) list to train on (default all 12; the other sea states keep ``init``'s weights). ``feature_set``:
     None = the init's ("h" without init); ``predictor``: the causal predictor of a predicted feature set ("hq",
-    agents/predictor.py; default ``init``'s). ``free``: "all" weights move, or only the "predicted" features'
-    (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper)."""
+    agents/predictor.py; default ``init``'s). ``free``: "all" weights move, or only the "predicted" (hq) or "gated"
+    (hs) features' (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper)."""
     __import__("towenv")
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from .baselines import load_tuned
@@ -305,13 +300,8 @@ def main(argv=None) -> int:
             init = arc.load_policy(a.init)
         except (OSError, ValueError, KeyError) as e:
             ap.error(f"--init: {e}")
-    predictor = None
-    if a.predictor:
-        from .predictor import Predictor
-        try:
-            predictor = Predictor.load(a.predictor)
-        except ValueError as e:
-            ap.error(f"--predictor: {e}")
+    from .predictor import load_option
+    predictor = load_option(ap, a.predictor)
     out = Path(a.export or default_export(a.seed))
     try:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight, a.hit_weight,

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Predictor", "fit_predictor", "predictor_seed", "check_channels", "from_policy_file", "push", "LEADS", "PRED_CHANNELS", "COMP_PRED_CHANNELS",
+__all__ = ["Predictor", "fit_predictor", "predictor_seed", "check_channels", "from_policy_file", "load_option", "push", "LEADS", "PRED_CHANNELS", "COMP_PRED_CHANNELS",
            "PRED_LAGS", "PREDICTOR_SEED_OFFSET", "main"]
 
 #: prediction leads in control steps (0.2 … 2.0 s ahead)
@@ -151,6 +151,17 @@ def from_policy_file(path, feature_set: str) -> "Predictor":
     except (KeyError, ValueError) as exc:
         raise ValueError(f"{path}: feature set {feature_set!r} but no readable predictor in the file "
                          f"({type(exc).__name__}: {exc})") from None
+
+
+def load_option(ap, path, option: str = "--predictor"):
+    """The predictor file given to a command-line ``option`` (None when not given); a usage error of the argparse
+    parser ``ap`` (exit 2) naming the option when the file is missing or not a predictor file."""
+    if not path:
+        return None
+    try:
+        return Predictor.load(path)
+    except (OSError, ValueError) as e:
+        ap.error(f"{option}: {e}")
 
 
 def shared_predictor(policies):

@@ -18,22 +18,19 @@ import numpy as np
 ENTRIES = (0, 1, 4, 5, 8, 9)
 
 
-def residual_split(policy_file, episode_seconds=None, discard: float = 60.0) -> dict:
-    """{WMO code: (RMS of the added features' part (2,), RMS of the other part (2,))} for one hq or hs policy file."""
+def residual_split(policy, episode_seconds=None, discard: float = 60.0) -> dict:
+    """{WMO code: (RMS of the added features' part (2,), RMS of the other part (2,))} for one hq or hs policy (a file,
+    or a loaded :class:`agents.ars_compensator.ARSCompensatorPolicy`)."""
     import gymnasium as gym
 
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from agents import ars_compensator as arc
     from agents.common import nearest_key, reset_copies
-    pol = arc.load_policy(policy_file)
-    names = arc.feature_names(pol.feature_set)
-    if pol.feature_set in arc.PREDICTED:
-        pm = np.array([n.endswith("(pred)") for n in names])
-    elif pol.feature_set in arc.GATED:
-        pm = np.array([n.startswith(arc.GATE_PREFIX) for n in names])
-    else:
-        raise ValueError(f"{policy_file}: feature set {pol.feature_set!r} has no added features (need hq or hs)")
+    pol = policy if isinstance(policy, arc.ARSCompensatorPolicy) else arc.load_policy(policy)
+    kind, pm = arc.added_features(pol.feature_set)
+    if not kind:
+        raise ValueError(f"{pol.name}: feature set {pol.feature_set!r} has no added features (need hq or hs)")
     ev = gym.make(arc.ENV_ID).unwrapped.eval_sea_states()
     ents = [ev[i] for i in ENTRIES]
     kw = {} if episode_seconds is None else {"episode_seconds": float(episode_seconds)}
@@ -63,23 +60,20 @@ def residual_split(policy_file, episode_seconds=None, discard: float = 60.0) -> 
     return out
 
 
-def arc_set(policy_file) -> str:
-    from agents import ars_compensator as arc
-    return arc.load_policy(policy_file).feature_set
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("policies", nargs="+", help="hq or hs compensator policy files (.npz)")
     ap.add_argument("--episode-seconds", type=float, default=None, help="episode length (default: the environment's)")
     ap.add_argument("--discard", type=float, default=60.0, help="start-up window left out (s)")
     a = ap.parse_args(argv)
+    from agents import ars_compensator as arc
     for f in a.policies:
         try:
-            res = residual_split(f, a.episode_seconds, a.discard)
-        except ValueError as exc:
+            pol = arc.load_policy(f)
+            res = residual_split(pol, a.episode_seconds, a.discard)
+        except (OSError, ValueError) as exc:
             ap.error(str(exc))
-        part = "predicted" if arc_set(f) == "hq" else "gated"
+        part = arc.added_features(pol.feature_set)[0]
         for code, (p, r) in res.items():
             print(f"{f}: code {code}: RMS residual (log-stiffness, log-damping): {part} part "
                   f"{p[0]:.3f} / {p[1]:.3f}, other features {r[0]:.3f} / {r[1]:.3f}", flush=True)

@@ -117,6 +117,34 @@ def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
         gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
 
+def test_gated_features_start_at_zero_and_free_gated_moves_only_them(capsys):
+    """From a committed Gauss–Newton policy to feature set hs: the h weights copied exactly and kept (free="gated"),
+    the gated copy starts at 0 and only it moves, in the sea state trained on (the Jacobian has one column per gated
+    weight); the residual-split probe names the gated part and refuses a missing file with exit 2."""
+    import agents
+    trained = Path(agents.__file__).parent / "trained"
+    init = arc.load_policy(trained / "gn_CompensatorGains-v0_s1.npz")
+    pol = gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, discard=60.0, progress=False,
+                    init=init, feature_set="hs", free="gated")
+    assert pol.feature_set == "hs" and pol.predictor is None and pol.meta["hyperparameters"]["free"] == "gated"
+    kind, moved = arc.added_features("hs")
+    nh = arc.n_features("h")
+    assert kind == "gated" and not moved[:nh].any() and moved[nh:].all()
+    for k in pol.theta:
+        assert np.array_equal(pol.theta[k][:, :nh], init.theta[k])
+    (pick,) = pol.meta["curve"][0]["picks"]
+    others = [x for x in pol.theta if x != pick["sea_state"]]
+    assert all(not np.any(pol.theta[x][:, nh:]) for x in others)
+    assert np.linalg.norm(pol.theta[pick["sea_state"]][:, nh:]) == pytest.approx(pick["step_norm"])
+    # 1 episode x (90 moved weights + 1) Jacobian copies + (3 ridges + 2) line-search copies, 62 s each
+    assert pol.meta["num_timesteps"] == (2 * 45 + 1 + 5) * 620
+    assert arc.added_features("h")[0] == "" and not arc.added_features("h")[1].any()
+    script = load_script("probe_residual_split")
+    with pytest.raises(SystemExit) as ex:
+        script.main(["no_such_policy.npz"])
+    assert ex.value.code == 2 and "no_such_policy" in capsys.readouterr().err
+
+
 def _seed_sets():
     """(evaluation base seeds, the reserved evaluation/tuning/validation/Hover/final/teacher seeds, the ARS
     (winch, compensator), probe and WinchPayout Gauss–Newton training seeds), value by value."""
