@@ -21,7 +21,9 @@ The result is an :class:`agents.ars.ARSPolicy` (same features, same file format,
 "gauss-newton"``), so ``scripts/evaluate.py`` and everything that loads ARS policies load it unchanged.
 
 Wave seeds: Jacobian episodes ``1000·code + j + 10·replicate + 80000 + 200·iteration + 100000·seed``, line-search
-episodes the same + 100; iteration < :data:`MAX_ITERATIONS`, replicate < 10 — never an evaluation (+0…400), tuning (+500), validation (+700), Hover
+episodes the same + 100, for iterations 0–48; iterations 49–97 (continuations past that block) use
+``1000·code + j + 10·replicate + 1000000 + 200·(iteration − 49) + 100000·seed`` (+ 100), above every other set;
+iteration < :data:`MAX_ITERATIONS`, replicate < 10, training seed < 10 — never an evaluation (+0…400), tuning (+500), validation (+700), Hover
 design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training (+40000…, +50000…), probe (+75000,
 +76000) or semi-active teacher-plan (+92000…) seed.
 """
@@ -36,19 +38,30 @@ import numpy as np
 from . import ars
 from .common import nearest_key
 
-__all__ = ["train", "train_seed", "initial_theta", "gauss_newton_steps", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
+__all__ = ["train", "train_seed", "initial_theta", "gauss_newton_steps", "MAX_ITERATIONS", "SEED_OFFSET",
+           "SECOND_BLOCK_OFFSET", "ITERATIONS_PER_BLOCK", "main"]
 
 #: wave seeds of the search: base seed (1000·code + j) + SEED_OFFSET + 200·iteration (+ 100 for the line search)
-#: + 100000·training seed
+#: + 100000·training seed, for iterations 0 … ITERATIONS_PER_BLOCK − 1
 SEED_OFFSET = 80000
 #: 200·iteration + 100 stays below 10000: a run's seeds stay inside its own block of 10000
-MAX_ITERATIONS = 49
+ITERATIONS_PER_BLOCK = 49
+#: iterations ITERATIONS_PER_BLOCK … MAX_ITERATIONS − 1 (continuations past the first block) use a second block:
+#: base seed + SECOND_BLOCK_OFFSET + 200·(iteration − ITERATIONS_PER_BLOCK) (+ 100) + 100000·training seed — above
+#: every other wave-seed set of the project for training seeds 0 … 9 (the largest of those, a first-block seed of
+#: training seed 9, is below 996000)
+SECOND_BLOCK_OFFSET = 1_000_000
+MAX_ITERATIONS = 2 * ITERATIONS_PER_BLOCK
 
 
 def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = False) -> int:
     if not 0 <= int(iteration) < MAX_ITERATIONS:
         raise ValueError(f"iteration must be in 0..{MAX_ITERATIONS - 1} (got {iteration})")
-    return int(base_seed) + SEED_OFFSET + 200 * int(iteration) + (100 if line_search else 0) + 100000 * int(seed)
+    if not 0 <= int(seed) < 10:
+        raise ValueError(f"seed (the training seed) must be in 0..9 (got {seed}; 100000·seed stays in its block)")
+    block, k = divmod(int(iteration), ITERATIONS_PER_BLOCK)
+    offset = SEED_OFFSET if block == 0 else SECOND_BLOCK_OFFSET
+    return int(base_seed) + offset + 200 * k + (100 if line_search else 0) + 100000 * int(seed)
 
 
 def initial_theta(init, keys, feature_set: str) -> np.ndarray:
@@ -140,6 +153,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     from towenv.envs.vector import WinchPayoutVectorEnv
     from .baselines import load_tuned
     check_settings(iterations, eps, ridges, replicates, episode_seconds, discard)
+    if not 0 <= int(seed) < 10:
+        raise ValueError(f"seed (the training seed) must be in 0..9 (got {seed}; 100000·seed stays in its block)")
     if feature_set in ars.PREDICTED:
         predictor = predictor if predictor is not None else getattr(init, "predictor", None)
         if predictor is None:
@@ -241,7 +256,9 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
                                 "init": init.name if init is not None else None},
             "init_num_timesteps": int(init.meta.get("num_timesteps", 0)) if init is not None else 0,
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
-                           f"+ 100000*{int(seed)}",
+                           f"+ 100000*{int(seed)} for iterations < {ITERATIONS_PER_BLOCK}, then "
+                           f"{SECOND_BLOCK_OFFSET} + 200*(iteration - {ITERATIONS_PER_BLOCK}) in place of "
+                           f"{SEED_OFFSET} + 200*iteration",
             "curve": curve}
     out = {k: theta[c] for c, k in enumerate(keys)}
     if init is not None:                        # sea states not trained on (``entries``) keep the initial weights
@@ -286,6 +303,8 @@ def main(argv=None) -> int:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
     if not 1 <= a.replicates <= 10 or a.pitch_weight < 0:
         ap.error("need 1 <= --replicates <= 10 and --pitch-weight >= 0")
+    if not 0 <= a.seed < 10:
+        ap.error(f"--seed must be in 0..9 (got {a.seed})")
     for name in ("minutes", "eps"):
         v = getattr(a, name)
         if not (math.isfinite(v) and v > 0):

@@ -69,6 +69,33 @@ def test_wave_seeds_are_disjoint_from_every_reserved_set():
     assert not used & (reserved | ars_training | probes)
     with pytest.raises(ValueError, match="iteration"):
         gn.train_seed(base[0], gn.MAX_ITERATIONS, 0)
+    with pytest.raises(ValueError, match="seed"):
+        gn.train_seed(base[0], 0, 10)
+
+
+def test_second_seed_block_is_above_every_other_training_set():
+    """Iterations past the first block (continuations from iteration 49 on) take seeds of their own: above every
+    first-block, ARS (winch and compensator) and compensator Gauss–Newton seed of any training seed 0..9, and
+    still distinct per (sea state, replicate, iteration, line search)."""
+    from agents import ars_compensator as arc, gn_compensator as gnc
+    base = [s for _, s in gym.make(WINCH).unwrapped.eval_sea_states()]
+    k = gn.ITERATIONS_PER_BLOCK
+    first = [gn.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10) for it in range(k)
+             for sd in range(10) for ls in (False, True)]
+    second = [gn.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+              for it in range(k, gn.MAX_ITERATIONS) for sd in range(10) for ls in (False, True)]
+    others = ([ars._train_seed(b, it, sd) for b in base for it in range(100) for sd in range(10)]
+              + [arc._train_seed(b, it, sd) for b in base for it in range(arc.MAX_ITERATIONS) for sd in range(10)]
+              + [gnc.train_seed(b + 10 * r, it, sd, ls) for b in base for r in range(10)
+                 for it in range(gnc.MAX_ITERATIONS) for sd in range(10) for ls in (False, True)])
+    assert min(second) >= gn.SECOND_BLOCK_OFFSET > max(first + others)
+    for b in base:               # within a (sea state, heading) no two episodes share a wave seed
+        mine = [gn.train_seed(b + 10 * r, it, sd, ls) for r in range(10) for it in range(k, gn.MAX_ITERATIONS)
+                for sd in range(10) for ls in (False, True)]
+        assert len(set(mine)) == len(mine)
+    # the first block is unchanged: committed policies' iteration seeds (docs/agents.md) stay what they were
+    assert gn.train_seed(5000, 48, 2, True) == 5000 + 80000 + 200 * 48 + 100 + 200000
+    assert gn.train_seed(5000, 49, 2) == 5000 + 1_000_000 + 200000
 
 
 @pytest.mark.parametrize("kw, field", [({"iterations": 0}, "iterations"), ({"eps": -1.0}, "eps"),
@@ -135,7 +162,7 @@ def test_v2q_search_carries_its_predictor_and_keeps_untrained_sea_states(trained
 
 def test_command_line_refuses_out_of_range_arguments(capsys):
     for bad in (["--iterations", str(gn.MAX_ITERATIONS + 1)], ["--eps", "0"], ["--ridges", "-1"],
-                ["--replicates", "0"], ["--replicates", "11"]):
+                ["--replicates", "0"], ["--replicates", "11"], ["--seed", "10"]):
         with pytest.raises(SystemExit) as ex:
             gn.main(bad)
         assert ex.value.code == 2
