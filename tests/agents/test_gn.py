@@ -173,7 +173,7 @@ def test_command_line_refuses_out_of_range_arguments(capsys):
     assert str(gn.default_export(1, "v3")) == "runs/gn_v3_WinchPayout-v0_s1.npz"
 
 
-@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5", "gnq", "gnq2", "gnqp"])
+@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5", "gnq", "gnq2", "gnqp", "gnqp2"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_committed_policies_ship_load_and_act(seed, family):
     """The committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed ``agents``,
@@ -183,7 +183,8 @@ def test_committed_policies_ship_load_and_act(seed, family):
     v2, the along-cable table's sea states; ``gnq``: 4 more from ``gn5`` (budget) with feature set v2q and the
     committed predictor, on codes 4-5 only — code 3 keeps ``gn5``'s weights, predicted features at 0; ``gnq2``: 5 more
     from ``gnq`` (budget), the same settings, code 3 still ``gnq``'s weights; ``gnqp``: 1 more from ``gnq2`` with the
-    cost's pitch weight 0.2 instead of 0.5) and act:
+    cost's pitch weight 0.2 instead of 0.5; ``gnqp2``: 3 more from ``gnqp``, iterations 49-51 on the second block of
+    wave seeds, with the pitch weight 0.1) and act:
     inside the action box and not the along-cable law itself."""
     from pathlib import Path
 
@@ -198,14 +199,15 @@ def test_committed_policies_ship_load_and_act(seed, family):
         hp = pol.meta["hyperparameters"]
         first, its, parent, reps = {"gn2": (10, 6, "gn", 2), "gn3": (16, 8, "gn2", 3), "gn4": (24, 8, "gn3", 3),
                                     "gn5": (32, 7, "gn4", 3), "gnq": (39, 4, "gn5", 3),
-                                    "gnq2": (43, 5, "gnq", 3), "gnqp": (48, 1, "gnq2", 3)}[family]
+                                    "gnq2": (43, 5, "gnq", 3), "gnqp": (48, 1, "gnq2", 3),
+                                    "gnqp2": (49, 3, "gnqp", 3)}[family]
         assert (pol.meta["first_iteration"], pol.meta["iterations"]) == (first, its)
         assert hp["init"] == f"{parent}_WinchPayout-v0_s{seed}" and hp["replicates"] == reps
         assert hp["ridges"] == [0.01, 0.1, 1.0, 10.0, 100.0]
-        assert hp["pitch_weight"] == (0.2 if family == "gnqp" else 0.5)
-    assert pol.feature_set == ("v2q" if family in ("gnq", "gnq2", "gnqp") else "v2")
+        assert hp["pitch_weight"] == {"gnqp": 0.2, "gnqp2": 0.1}.get(family, 0.5)
+    assert pol.feature_set == ("v2q" if family in ("gnq", "gnq2", "gnqp", "gnqp2") else "v2")
     assert set(pol.theta) == set(load_tuned()["along_cable"])
-    if family in ("gnq", "gnq2", "gnqp"):
+    if family in ("gnq", "gnq2", "gnqp", "gnqp2"):
         from agents.predictor import Predictor
         pred = Predictor.load(Path(agents.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
         assert all(np.array_equal(pol.predictor.W[k], pred.W[k]) for k in pred.W)
