@@ -26,6 +26,8 @@ from pathlib import Path
 ENTRIES = tuple(range(4, 12))
 #: wave-seed replicates of the evaluation set used (+0, +100)
 REPLICATES = 2
+#: the evaluation's episode length (the environment's default): fitted episodes of this length are the scored ones
+EPISODE_SECONDS = 300.0
 
 
 def eval_seed(search_base_seed: int) -> int:
@@ -45,12 +47,15 @@ def main(argv=None) -> int:
     ap.add_argument("--iterations", type=int, default=3, help="Gauss-Newton iterations (1..10, default 3)")
     ap.add_argument("--pitch-weight", type=float, default=0.1, help="weight of ln(σ_pitch ratio) (default 0.1)")
     ap.add_argument("--minutes", type=float, default=60.0, help="wall-clock budget (default 60)")
+    ap.add_argument("--episode-seconds", type=float, default=EPISODE_SECONDS,
+                    help=f"length of the fitted episodes (default {EPISODE_SECONDS:g} s: the evaluation's, so the fit "
+                         "sees the whole scored window; the search's own default, 180 s, fits only its first 120 s)")
     ap.add_argument("--export", required=True, help="where the fitted probe file goes (e.g. runs/class_bound/...)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= 10:
         ap.error(f"--iterations must be in 1..10 (got {a.iterations})")
-    if not a.pitch_weight >= 0 or not a.minutes > 0:
-        ap.error("need --pitch-weight >= 0 and --minutes > 0")
+    if not a.pitch_weight >= 0 or not a.minutes > 0 or not a.episode_seconds > 61.0:
+        ap.error("need --pitch-weight >= 0, --minutes > 0 and --episode-seconds > 61 (scored after 60 s)")
     import agents
     from agents import ars, gn
     out = Path(a.export)
@@ -68,12 +73,12 @@ def main(argv=None) -> int:
     try:
         pol = gn.train(seed=int(init.meta.get("seed", 0)), iterations=a.iterations, minutes=a.minutes,
                        replicates=REPLICATES, ridges=(0.01, 0.1, 1.0, 10.0, 100.0), pitch_weight=a.pitch_weight,
-                       feature_set="v2q", entries=list(ENTRIES), init=init)
+                       feature_set="v2q", entries=list(ENTRIES), init=init, episode_seconds=a.episode_seconds)
     finally:
         gn.train_seed = real
     pol.meta["probe"] = ("in-sample class bound (scripts/probe_class_bound.py): fitted on the evaluation set's "
                          "entries 4-11, wave seeds +0 and +100 — not a policy")
-    pol.meta["train_seeds"] = "the evaluation set's own seeds (in-sample)"
+    pol.meta["train_seeds"] = f"the evaluation set's own seeds (in-sample), {a.episode_seconds:g} s episodes"
     pol.name = f"{out.stem}"
     out.parent.mkdir(parents=True, exist_ok=True)
     ars.save_policy(pol, out)

@@ -29,8 +29,11 @@ def test_search_episodes_are_exactly_the_scored_evaluation_episodes(tmp_path, mo
     bases = _eval_bases()
     asked = []
 
-    def fake_train(seed, iterations, minutes, replicates, ridges, pitch_weight, feature_set, entries, init):
+    def fake_train(seed, iterations, minutes, replicates, ridges, pitch_weight, feature_set, entries, init,
+                   episode_seconds):
         assert (replicates, list(entries), feature_set, pitch_weight) == (2, list(range(4, 12)), "v2q", 0.1)
+        # the fitted episodes are the scored ones whole: the evaluation's length (the environment's default)
+        assert episode_seconds == gym.make(ars.ENV_ID).unwrapped.episode_seconds == 300.0
         for i in entries:                       # as agents/gn.py asks: base seed + 10·replicate, both searches
             for r in range(replicates):
                 for ls in (False, True):
