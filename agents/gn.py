@@ -54,11 +54,16 @@ SECOND_BLOCK_OFFSET = 1_000_000
 MAX_ITERATIONS = 2 * ITERATIONS_PER_BLOCK
 
 
+def check_training_seed(seed) -> None:
+    """ValueError naming the training seed unless it is 0..9 (100000·seed keeps a run's seeds in its own block)."""
+    if not 0 <= int(seed) < 10:
+        raise ValueError(f"seed (the training seed) must be in 0..9 (got {seed}; 100000·seed stays in its block)")
+
+
 def train_seed(base_seed: int, iteration: int, seed: int, line_search: bool = False) -> int:
     if not 0 <= int(iteration) < MAX_ITERATIONS:
         raise ValueError(f"iteration must be in 0..{MAX_ITERATIONS - 1} (got {iteration})")
-    if not 0 <= int(seed) < 10:
-        raise ValueError(f"seed (the training seed) must be in 0..9 (got {seed}; 100000·seed stays in its block)")
+    check_training_seed(seed)
     block, k = divmod(int(iteration), ITERATIONS_PER_BLOCK)
     offset = SEED_OFFSET if block == 0 else SECOND_BLOCK_OFFSET
     return int(base_seed) + offset + 200 * k + (100 if line_search else 0) + 100000 * int(seed)
@@ -142,19 +147,21 @@ def _cost(sh, sp, sh_ref, sp_ref, pitch_weight, fail_penalty=1.0):
 def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates: int = 1, eps: float = 0.005,
           ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, episode_seconds: float = 180.0,
           discard: float = 60.0, feature_set: str = ars.DEFAULT_FEATURE_SET, entries=None, progress: bool = True,
-          log=print, init: ars.ARSPolicy | None = None, predictor=None) -> ars.ARSPolicy:
+          log=print, init: ars.ARSPolicy | None = None, predictor=None, wave_seed=None) -> ars.ARSPolicy:
     """Gauss–Newton search (module docstring) from θ = 0 (the along-cable law), or from the policy ``init`` (an
     :class:`agents.ars.ARSPolicy` of any feature set: its weights are copied by feature name, features it does not
     have start at 0; its along-cable table is kept; the iterations continue its count, so the wave seeds are fresh).
     Stops after ``iterations`` more or when the next iteration would pass ``minutes`` of wall time. ``entries``:
     indices into the evaluation (sea state, heading) list to train on (default all 12). ``predictor``: the causal
-    predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default ``init``'s)."""
+    predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default ``init``'s). ``wave_seed``:
+    ``f(base seed + 10·replicate, iteration, seed, line_search) -> wave seed`` of every episode (default
+    :func:`train_seed`; ``scripts/probe_class_bound.py`` passes the evaluation set's own seeds)."""
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import WinchPayoutVectorEnv
     from .baselines import load_tuned
     check_settings(iterations, eps, ridges, replicates, episode_seconds, discard)
-    if not 0 <= int(seed) < 10:
-        raise ValueError(f"seed (the training seed) must be in 0..9 (got {seed}; 100000·seed stays in its block)")
+    check_training_seed(seed)
+    wave_seed = train_seed if wave_seed is None else wave_seed
     if feature_set in ars.PREDICTED:
         predictor = predictor if predictor is not None else getattr(init, "predictor", None)
         if predictor is None:
@@ -192,7 +199,7 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
         code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
         seas = [sea for sea, _s in ents]
         # 1. Jacobian: copy block 0 runs θ, block i + 1 runs θ + ε e_i
-        seeds = [train_seed(s + 10 * r, it, seed) for (_sea, s), r in zip(ents, reps)]
+        seeds = [wave_seed(s + 10 * r, it, seed) for (_sea, s), r in zip(ents, reps)]
         th = np.repeat(theta[code][None], NF + 1, axis=0)
         for i in range(NF):
             th[i + 1, :, i] += eps
@@ -211,7 +218,7 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
         steps = gauss_newton_steps([(Jy, y0, 1.0 / sy ** 2), (Jq, q0, pitch_weight / sq ** 2)], code, ok, C,
                                    ridges)
         # 3. line search on fresh episodes: along_cable, θ, θ + Δθ(λ) for every λ, on the same waves
-        seeds_l = [train_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
+        seeds_l = [wave_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
         cand = np.concatenate([np.zeros((1, n_ep, NF)), theta[code][None], theta[code][None] + steps[:, code]])
         H, P, t, ended = ars.rollout_series(venv_l, batch_l, seas * len(cand), seeds_l * len(cand),
                                             cand.reshape(-1, NF))
@@ -303,8 +310,10 @@ def main(argv=None) -> int:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
     if not 1 <= a.replicates <= 10 or a.pitch_weight < 0:
         ap.error("need 1 <= --replicates <= 10 and --pitch-weight >= 0")
-    if not 0 <= a.seed < 10:
-        ap.error(f"--seed must be in 0..9 (got {a.seed})")
+    try:
+        check_training_seed(a.seed)
+    except ValueError as e:
+        ap.error(f"--{e}")
     for name in ("minutes", "eps"):
         v = getattr(a, name)
         if not (math.isfinite(v) and v > 0):

@@ -23,30 +23,27 @@ def _eval_bases():
 
 def test_search_episodes_are_exactly_the_scored_evaluation_episodes(tmp_path, monkeypatch):
     """Every Jacobian and line-search seed the patched search asks for is an evaluation-set seed of entries 4-11
-    (replicates +0, +100), all 16 of them are used, gn.train_seed is restored afterwards, and the file says it is a
-    probe. A mapping that fell back to the search's own training seeds would fail the first assertion."""
+    (replicates +0, +100), all 16 of them are used, and the file says it is a probe. A mapping that fell back to the search's own training seeds would fail the first assertion."""
     probe = load_script("probe_class_bound")
     bases = _eval_bases()
     asked = []
 
     def fake_train(seed, iterations, minutes, replicates, ridges, pitch_weight, feature_set, entries, init,
-                   episode_seconds):
+                   episode_seconds, wave_seed):
         assert (replicates, list(entries), feature_set, pitch_weight) == (2, list(range(4, 12)), "v2q", 0.1)
         # the fitted episodes are the scored ones whole: the evaluation's length (the environment's default)
         assert episode_seconds == gym.make(ars.ENV_ID).unwrapped.episode_seconds == 300.0
         for i in entries:                       # as agents/gn.py asks: base seed + 10·replicate, both searches
             for r in range(replicates):
                 for ls in (False, True):
-                    asked.append(gn.train_seed(bases[i] + 10 * r, 52, seed, ls))
+                    asked.append(wave_seed(bases[i] + 10 * r, 52, seed, ls))
         return init
 
     monkeypatch.setattr(gn, "train", fake_train)
-    real = gn.train_seed
     out = tmp_path / "fit.npz"
     assert probe.main(["--init", str(INIT), "--export", str(out)]) == 0
     assert set(asked) == set(episode_seeds([bases[i] for i in range(4, 12)], "eval", 2))
     assert len(set(asked)) == 16
-    assert gn.train_seed is real
     assert "not a policy" in ars.load_ars_policy(out).meta["probe"]
 
 
