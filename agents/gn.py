@@ -161,6 +161,9 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     from .baselines import load_tuned
     check_settings(iterations, eps, ridges, replicates, episode_seconds, discard)
     check_training_seed(seed)
+    # the line search's episodes are fresh (other seeds than the Jacobian's) with the training seeds; a caller's
+    # wave_seed (the class-bound probe: the evaluation's own episodes) says nothing of the kind
+    episodes_word = "fresh episodes" if wave_seed is None else "line-search episodes"
     wave_seed = train_seed if wave_seed is None else wave_seed
     if feature_set in ars.PREDICTED:
         predictor = predictor if predictor is not None else getattr(init, "predictor", None)
@@ -245,7 +248,7 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
                       "picks": picks, "failures": int(bad.sum())})
         if progress:
             log(f"[gn] it {it:2d} ({last:4.0f} s, {(time.perf_counter() - t_start) / 60:5.1f} min): θ before this "
-                f"step vs along_cable on {n_ep} fresh episodes: heave {100 * (ratio_h - 1):+6.2f} %, pitch "
+                f"step vs along_cable on {n_ep} {episodes_word}: heave {100 * (ratio_h - 1):+6.2f} %, pitch "
                 f"{100 * (ratio_p - 1):+5.1f} %; cost per sea state " + ", ".join(
                     f"{p['cost_current']:+.3f} -> {p['cost_after']:+.3f}"
                     + (f" (ridge {p['ridge']:g})" if p["ridge"] is not None else " (no step)") for p in picks))

@@ -10,7 +10,9 @@ interfaces that the previous release also has, so the same command against an ol
 * the layers of one WinchPayout-v0 env step (zero action), each timed on its own, so that the difference between
   two rows is the Python of that layer: the ``gym.make`` env (Gymnasium's wrappers), ``TowEnv.step``,
   ``base.step_copies`` (action map, observation/reward/flags, result), ``BatchStepper.step`` (the compiled physics
-  of one control step with its per-call costs) and the single env's ``StepResult.info``. The env and step_copies
+  of one control step with its per-call costs) and the single env's ``StepResult.info``; then ``TowEnv.step`` through
+  ``step_copies`` against the prepared path that the standard pieces take since 2026-12-05
+  (``TowEnv._step_planned``), alternating runs, both environments. The env and step_copies
   rows include an episode reset every 3000 steps; the step_copies and stepper rows step on past the episode's end
   (the physics does not care).
 
@@ -95,9 +97,47 @@ def _layers():
                     ("base.step_copies", lambda: B.step_copies([env], rows, idx)),
                     ("BatchStepper.step (physics + per-call compiled costs)",
                      lambda: st.step(env.substeps, env.ACT_KIND, None)),
-                    ("StepResult.info (inside TowEnv.step)", lambda: res.info(0))):
+                    ("StepResult.info (inside TowEnv.step's general path)", lambda: res.info(0))):
         print(f"  {name}: {_best(f, n):.1f}")
+    if hasattr(B, "_StepPlan"):
+        _prepared_vs_general()
 
+
+def _prepared_vs_general(pairs=21, steps=1000):
+    """Since 2026-12-05 ``TowEnv.step`` takes a prepared path with the standard pieces (``TowEnv._step_planned``);
+    the general path (``step_copies`` + ``StepResult.info``) is what custom pieces take. Both envs, the same
+    random actions and episode, alternating runs of ``steps`` steps by process CPU time; median of the per-pair
+    ratios (the figure that holds when the host's speed drifts)."""
+    import statistics
+
+    import gymnasium as gym
+    from towenv.envs import base as B
+    print(f"TowEnv.step, prepared path vs the general path ({pairs} alternating pairs of {steps} steps, µs of CPU):")
+    for env_id in ("towenv/WinchPayout-v0", "towenv/CompensatorGains-v0"):
+        env = gym.make(env_id).unwrapped
+        acts = np.random.default_rng(0).uniform(-1, 1, (steps,) + env.action_space.shape).astype(np.float32)
+
+        def run(general):
+            env.reset(seed=0, options={"eval_index": 4})
+            if general:
+                plan = B._StepPlan.__new__(B._StepPlan)
+                plan.rows, plan.row, plan.observer, plan.reward_fn = env._rows, env._row, env.observer, env.reward_fn
+                plan.limits, plan.fast = env._limits, False
+                env._plan = plan
+            c0 = time.process_time()
+            for a in acts:
+                env.step(a)
+            return (time.process_time() - c0) / steps * 1e6
+
+        run(False), run(True)                          # warm-up
+        fast, slow = [], []
+        for k in range(pairs):
+            order = (False, True) if k % 2 else (True, False)
+            for g in order:
+                (slow if g else fast).append(run(g))
+        ratios = [f / g for f, g in zip(fast, slow)]
+        print(f"  {env_id}: prepared {statistics.median(fast):.1f}, general {statistics.median(slow):.1f}; "
+              f"prepared/general median {statistics.median(ratios):.3f} (pairs {min(ratios):.3f}-{max(ratios):.3f})")
 
 if __name__ == "__main__":
     main()

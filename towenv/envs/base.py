@@ -459,6 +459,7 @@ class TowEnv(gym.Env):
         sim.set_sea(sea, int(wseed))
         sim.reset()
         self._sea = (sea, int(wseed))
+        self._plan = None                               # step()'s prepared arrays and entry point: made anew
         obs = self._start_episode(sim, rng)
         info = {"sea_state": {"hs": float(sea.hs), "tp": float(sea.tp), "heading_deg": float(sea.heading_deg)},
                 "sea_seed": int(wseed), "vessel_speed": float(sim.path.initial_speed), "t": 0.0}
@@ -544,6 +545,12 @@ class TowEnv(gym.Env):
         rows = self._rows
         i = self._row
         rows.actions[i] = action                        # a copy (float64): the caller's array is kept
+        plan = self.__dict__.get("_plan")
+        if plan is None or plan.rows is not rows or plan.row != i or plan.observer is not self.observer \
+                or plan.reward_fn is not self.reward_fn or plan.limits is not self._limits:
+            plan = self._plan = _StepPlan(self)
+        if plan.fast:
+            return self._step_planned(plan)
         idx = self.__dict__.get("_idx")
         if idx is None or idx[0] != i:                  # this copy's row, as the index array step_copies takes
             idx = self._idx = np.array([i])
@@ -553,6 +560,48 @@ class TowEnv(gym.Env):
         info = res.info(0)
         if terminated or truncated:
             self._needs_reset = "ended"
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, terminated, truncated, info
+
+    def _step_planned(self, plan):
+        """:meth:`step` for the standard observation / reward / termination pieces without a wave preview (what
+        :func:`step_copies` does for one row, with its arrays and the compiled call's entry point prepared once
+        per episode in ``plan``): the same arithmetic in the same order, bit for bit (tested); an episode's end
+        or a numerical failure is handed to :func:`_finish` as there."""
+        rows = self._rows
+        st = rows.stepper
+        A = rows.actions
+        idx = plan.idx
+        if self._commands(A, idx, st.U, rows.amap):     # also cleans A[idx] (NaN -> 0, clip to [-1, 1])
+            _warn_cleaned(self, rows)
+        failures = st.step(self.substeps, self.ACT_KIND, plan.active)
+        obs_fn = plan.observer
+        args = plan.args
+        if obs_fn._noisy:
+            args = list(args)
+            args[plan.noise_slot], args[plan.noise_slot + 1] = obs_fn.noise_rows([self.np_random], 1)
+        nterm = plan.call(*args)
+        O, R, term, trunc = plan.O, plan.R, plan.term, plan.trunc
+        if obs_fn.delay:
+            O[0] = obs_fn.push(O[0])
+        obs = O[0].copy()
+        if nterm or failures:
+            res = _finish([self], rows, idx, st.M, A, None, st.refs, O, R, plan.C, plan.names, plan.limits, term,
+                          trunc, nterm, failures)
+            reward, terminated, truncated = float(R[0]), bool(term[0]), bool(trunc[0])
+            info = res.info(0)
+            if terminated or truncated:
+                self._needs_reset = "ended"
+        else:
+            reward, truncated = float(R[0]), bool(trunc[0])
+            terminated = False
+            row = st.M[plan.row].tolist()
+            info = {"t": row[MS.M_T], "reward_components": dict(zip(plan.names, plan.C[0].tolist())),
+                    "fish_heave": row[MS.M_HEAVE], "fish_pitch": row[MS.M_PITCH], "top_tension": row[MS.M_TOP_T],
+                    "end_stop_hits": int(row[MS.M_HITS]), "slack": row[MS.M_MIN_T] <= plan.slack}
+            if truncated:
+                self._needs_reset = "ended"
         if self.render_mode == "human":
             self.render()
         return obs, reward, terminated, truncated, info
@@ -709,6 +758,7 @@ class TowEnv(gym.Env):
     def __getstate__(self):
         st = self.__dict__.copy()
         st["_viewer"] = None           # matplotlib figures are not pickled; re-created on demand (a given
+        st.pop("_plan", None)          # compiled entry point: re-made on the next step
         return st                      # ``renderer`` is pickled with the environment)
 
     def __setstate__(self, st):
@@ -749,6 +799,60 @@ class EnvRows:
     def envs_of(self, i, default):
         e = self.envs[i]
         return default if e is None else e
+
+
+class _StepPlan:
+    """What :meth:`TowEnv.step` needs per step for one row with the standard pieces, prepared once: the row's index
+    array and activity mask, the reused output arrays (rewards, components, flags, the observation row — the
+    observation handed out is a copy), the argument tuple of :func:`_observe_reward_flags` and its compiled
+    entry point (numba's type dispatch of 25 arguments skipped: valid while the arguments are these same
+    objects, which the plan checks by identity — a new plan is made when the row, the observer, the reward
+    function or the termination limits change, and at every reset). ``fast`` is False for other pieces (a
+    custom observer or reward, a termination without limits, a wave preview): :func:`step_copies` then."""
+
+    __slots__ = ("rows", "row", "observer", "reward_fn", "limits", "fast", "idx", "active", "O", "R", "C", "term",
+                 "trunc", "names", "slack", "args", "noise_slot", "call")
+
+    def __init__(self, env):
+        self.rows, self.row = env._rows, env._row
+        self.observer, self.reward_fn, self.limits = obs_fn, rew_fn, lim = env.observer, env.reward_fn, env._limits
+        self.fast = (lim is not None and not env._wants_preview
+                     and getattr(type(obs_fn), "measure_rows", None) is _MEASURE_ROWS
+                     and getattr(type(rew_fn), "batch", None) is _REWARD_BATCH)
+        if not self.fast:
+            return
+        st = self.rows.stepper
+        self.idx = np.array([self.row])
+        if st.num_copies == 1:
+            self.active = None
+        else:
+            self.active = np.zeros(st.num_copies, bool)
+            self.active[self.row] = True
+        self.O = np.empty((1, obs_fn.size), np.float32)
+        self.R = np.empty(1)
+        self.names = rew_fn.COMPONENTS
+        self.C = np.empty((1, len(self.names)))
+        self.term = np.empty(1, bool)
+        self.trunc = np.empty(1, bool)
+        self.slack = env._slack()
+        noise, noisy = obs_fn.noise_rows(None, 1)
+        arrays = obs_fn.rows_arrays()
+        self.noise_slot = 5 + len(arrays)
+        self.args = (st.M, self.rows.actions, self.rows.prev_action, _NO_PREVIEW, self.idx, *arrays, noise, noisy,
+                     self.O, rew_fn.weight_vector(), rew_fn.slack_tension, rew_fn.over_tension_fraction, self.C,
+                     self.R, *lim, st.refs, self.term, self.trunc)
+        self.call = _observe_reward_flags
+        try:                                   # (a drawn noise array has the type of the placeholder: float64 2-D C)
+            from numba import typeof
+            sig = tuple(typeof(a) for a in self.args)
+            cres = _observe_reward_flags.overloads.get(sig)
+            if cres is None:                   # first use in this process: compile (or load from the cache)
+                _observe_reward_flags.compile(sig)
+                cres = _observe_reward_flags.overloads.get(sig)
+        except Exception:                      # an unexpected numba internals change: keep the dispatcher
+            cres = None
+        if cres is not None:
+            self.call = cres.entry_point
 
 
 class StepResult:
