@@ -11,8 +11,8 @@ it reaches 0.9 × the clairvoyant's CR on the same episodes, the class can and t
 misses; if it stays below, that is a lower estimate of the class's in-sample optimum (the search may not have
 converged), evidence against the class but not a proof.
 
-    python scripts/probe_class_bound.py --init agents/trained/gnqp2_WinchPayout-v0_s1.npz --iterations 3 --export runs/class_bound/fit_s1.npz
-    python scripts/evaluate.py runs/class_bound/fit_s1.npz --also agents/trained/gnqp2_WinchPayout-v0_s1.npz --episodes 4 5 6 7 8 9 10 11 --replicates 2 --seed-set eval --baselines fixed_winch along_cable clairvoyant --no-plots --name class_bound --out-dir runs/class_bound
+    python scripts/probe_class_bound.py --init agents/trained/gnqp2_WinchPayout-v0_s1.npz --iterations 3 --export runs/class_bound/fit300_s1.npz
+    python scripts/evaluate.py runs/class_bound/fit300_s1.npz --also agents/trained/gnqp2_WinchPayout-v0_s1.npz --episodes 4 5 6 7 8 9 10 11 --replicates 2 --seed-set eval --baselines fixed_winch along_cable clairvoyant --no-plots --name class_bound --out-dir runs/class_bound
 
 The fitted file is a probe artefact (``meta["probe"]`` says so): it has seen the evaluation set and must never be
 committed or reported as a policy. The search's settings are the committed ``gnqp2`` continuation's (three

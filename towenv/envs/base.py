@@ -596,10 +596,7 @@ class TowEnv(gym.Env):
         else:
             reward, truncated = float(R[0]), bool(trunc[0])
             terminated = False
-            row = st.M[plan.row].tolist()
-            info = {"t": row[MS.M_T], "reward_components": dict(zip(plan.names, plan.C[0].tolist())),
-                    "fish_heave": row[MS.M_HEAVE], "fish_pitch": row[MS.M_PITCH], "top_tension": row[MS.M_TOP_T],
-                    "end_stop_hits": int(row[MS.M_HITS]), "slack": row[MS.M_MIN_T] <= plan.slack}
+            info = _info_dict(st.M[plan.row].tolist(), dict(zip(plan.names, plan.C[0].tolist())), plan.slack)
             if truncated:
                 self._needs_reset = "ended"
         if self.render_mode == "human":
@@ -807,7 +804,9 @@ class _StepPlan:
     observation handed out is a copy), the argument tuple of :func:`_observe_reward_flags` and its compiled
     entry point (numba's type dispatch of 25 arguments skipped: valid while the arguments are these same
     objects, which the plan checks by identity — a new plan is made when the row, the observer, the reward
-    function or the termination limits change, and at every reset). ``fast`` is False for other pieces (a
+    function or the termination limits change, and at every reset; the reward's parameters — weights, slack and
+    over-tension thresholds — are read then, being constructor parameters, as :meth:`HeavePitchReward.weight_vector`
+    already assumes). ``fast`` is False for other pieces (a
     custom observer or reward, a termination without limits, a wave preview): :func:`step_copies` then."""
 
     __slots__ = ("rows", "row", "observer", "reward_fn", "limits", "fast", "idx", "active", "O", "R", "C", "term",
@@ -855,6 +854,15 @@ class _StepPlan:
             self.call = cres.entry_point
 
 
+def _info_dict(row, comps, slack) -> dict:
+    """The single-environment ``info`` keys every step has, from a measurement row as Python floats (``M[i].tolist()``,
+    one numpy call), the reward components and the reward's slack threshold (N); the one definition both step paths
+    use (:meth:`StepResult.info`, :meth:`TowEnv._step_planned`)."""
+    return {"t": row[MS.M_T], "reward_components": comps, "fish_heave": row[MS.M_HEAVE], "fish_pitch": row[MS.M_PITCH],
+            "top_tension": row[MS.M_TOP_T], "end_stop_hits": int(row[MS.M_HITS]),
+            "slack": bool(row[MS.M_MIN_T] <= slack)}
+
+
 class StepResult:
     """Outcome of :func:`step_copies` for rows ``idx`` (arrays indexed by position k in ``idx``)."""
 
@@ -865,14 +873,10 @@ class StepResult:
         """The single-environment ``info`` dict of row position k."""
         e = self.envs[k]
         i = self.idx[k]
-        row = self.rows.stepper.M[i].tolist()      # Python floats, as float(M[i, c]) gives; one numpy call
-        t, heave, pitch, top, hits, min_t = (row[MS.M_T], row[MS.M_HEAVE], row[MS.M_PITCH], row[MS.M_TOP_T],
-                                             row[MS.M_HITS], row[MS.M_MIN_T])
         comps = dict(zip(self.names, self.comps[k].tolist())) if self.names is not None else self.comps[k]
         if k in self.terminal_costs:
             comps["terminal"] = self.terminal_costs[k]
-        info = {"t": t, "reward_components": comps, "fish_heave": heave, "fish_pitch": pitch, "top_tension": top,
-                "end_stop_hits": int(hits), "slack": bool(min_t <= e._slack())}
+        info = _info_dict(self.rows.stepper.M[i].tolist(), comps, e._slack())
         if k in self.reasons:
             info["termination"] = self.reasons[k]
         f = self.failures.get(int(i))
