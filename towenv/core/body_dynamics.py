@@ -41,12 +41,24 @@ def _table_coefficients(theta, inc, cd, cl, cm, n):
     and the centre of pressure stays aft of the tow point). Without the fold the table's ±90° cross-flow
     values would be used for a body that merely reverses (reported by the validation of Hover's deep tow).
     Tables that cover |θ| > 90° themselves are used as given."""
+    sign = 1.0
     if abs(theta) > 90.0 and (theta > inc[n - 1] or theta < inc[0]) and inc[n - 1] <= 90.0 and inc[0] >= -90.0:
         tf = 180.0 - abs(theta)
         if theta < 0.0:
             tf = -tf
-        return (table_lookup(tf, inc, cd, n), -table_lookup(tf, inc, cl, n), table_lookup(tf, inc, cm, n))
-    return table_lookup(theta, inc, cd, n), table_lookup(theta, inc, cl, n), table_lookup(theta, inc, cm, n)
+        theta = tf
+        sign = -1.0
+    # the three tables share the incidences: one search, then table_lookup's arithmetic on each
+    if theta <= inc[0]:
+        return cd[0], sign * cl[0], cm[0]
+    if theta >= inc[n - 1]:
+        return cd[n - 1], sign * cl[n - 1], cm[n - 1]
+    i = 0
+    while inc[i + 1] < theta:
+        i += 1
+    f = (theta - inc[i]) / (inc[i + 1] - inc[i])
+    return (cd[i] * (1.0 - f) + cd[i + 1] * f, sign * (cl[i] * (1.0 - f) + cl[i + 1] * f),
+            cm[i] * (1.0 - f) + cm[i + 1] * f)
 
 
 @njit(cache=True)
@@ -289,7 +301,8 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
     the reaction of a series-tow tail cable at the aft tow point. Adds the rigid-body Coriolis and
     centripetal terms, forms A = M_RB + M_A about the tow point, and adds ``Λᵀ A_eff Λ`` to the node
     mass and ``Λᵀ (F − A_tr A_rr⁻¹ M)`` to the node force. Returns ``X = A_rr⁻¹ A_rt`` and
-    ``y = A_rr⁻¹ M`` so that afterwards ``ω̇ = y − X a`` (a = Λ r̈). False if A_rr is singular."""
+    ``y = A_rr⁻¹ M`` so that afterwards ``ω̇ = y − X a`` (a = Λ r̈). False if A_rr is singular. ``att`` is
+    scratch on return (A_tt is overwritten by the last rotation's products)."""
     if has_tail:
         f0 = lam[0, 0] * tail_force[0] + lam[0, 1] * tail_force[1] + lam[0, 2] * tail_force[2]
         f1 = lam[1, 0] * tail_force[0] + lam[1, 1] * tail_force[1] + lam[1, 2] * tail_force[2]
@@ -377,13 +390,17 @@ def _condense(b, a, has_tail, lam, w, tail_force, bp, fb, mb, att, atr, arr, arr
             for k in range(3):
                 e -= atr[i, k] * X[k, j]
             aeff[i, j] = e
-    # global: M += Λᵀ A_eff Λ ; F += Λᵀ f_eff
+    # global: M += Λᵀ A_eff Λ ; F += Λᵀ f_eff (the products Λ_ki A_eff,km, the same for every j, are formed
+    # once per i in att — A_tt is not needed any more: the same arithmetic in the same order)
     for i in range(3):
+        for k in range(3):
+            for m in range(3):
+                att[k, m] = lam[k, i] * aeff[k, m]
         for j in range(3):
             sacc = 0.0
             for k in range(3):
                 for m in range(3):
-                    sacc += lam[k, i] * aeff[k, m] * lam[m, j]
+                    sacc += att[k, m] * lam[m, j]
             mnode[a, i, j] += sacc
         fnode[a, i] += lam[0, i] * tmp3[0] + lam[1, i] * tmp3[1] + lam[2, i] * tmp3[2]
     return True

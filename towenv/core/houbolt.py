@@ -305,13 +305,17 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
                 arr[i, i] -= scr[4, i]
         for i in range(3):
             bkc[b, BK_INERTIA + i] = arr[i, i]
-        # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ
+        # body hydrodynamic damping −∂F/∂v (body axes, full matrix) rotated to global: Λᵀ D Λ (the products
+        # Λ_ki D_km, the same for every j, are formed once per i in tmp33: the same arithmetic in the same order)
         for i in range(3):
+            for k in range(3):
+                for m in range(3):
+                    tmp33[k, m] = lam[k, i] * bdmat[b, k, m]
             for j in range(3):
                 sacc = 0.0
                 for k in range(3):
                     for m in range(3):
-                        sacc += lam[k, i] * bdmat[b, k, m] * lam[m, j]
+                        sacc += tmp33[k, m] * lam[m, j]
                 bnode[a, i, j] += sacc
     if it == 1 and any_aft:
         # series tows: the tail's restoring moment relaxes the body-angle update (rate only)
@@ -347,14 +351,21 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
         # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
         # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
         # both sides, so they change the convergence rate only, never the converged solution.
+        # (K_g accumulates in att segment by segment: per entry the same sum in the same order as a sum per
+        # entry, with T/ℓ divided once per segment instead of once per entry)
         for i in range(3):
             for j in range(3):
-                kg = 0.0
-                for k in range(node_nseg[a]):
-                    sk = node_segs[a, k]
-                    if stretched[sk] > 0.0:
-                        kg += tens[sk] / stretched[sk] * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
-                att[i, j] = c11 * bnode[a, i, j] + hdt2 * kg
+                att[i, j] = 0.0
+        for k in range(node_nseg[a]):
+            sk = node_segs[a, k]
+            if stretched[sk] > 0.0:
+                t_over_l = tens[sk] / stretched[sk]
+                for i in range(3):
+                    for j in range(3):
+                        att[i, j] += t_over_l * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+        for i in range(3):
+            for j in range(3):
+                att[i, j] = c11 * bnode[a, i, j] + hdt2 * att[i, j]
                 tmp33[i, j] = mnode[a, i, j] + att[i, j]
         # a body towing a tail from its aft tow point. Relaxed coupling: the tail's pull is a load on the body
         # inside the Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ

@@ -37,6 +37,7 @@ STAMP_NAME = "towenv-kernel-sources.sha1"
 
 def njit(*args, **kw):
     kw.setdefault("fastmath", FASTMATH)
+    kw.setdefault("error_model", "numpy")
     return _njit(*args, **kw)
 
 
