@@ -70,3 +70,19 @@ def test_a_compiling_run_and_a_cached_run_give_the_same_bits(tmp_path):
             assert list((tmp_path / "cache").rglob("*.nbi")), "the first run wrote no numba cache"
     assert runs[0] == runs[1]
     assert jit.FASTMATH is False
+
+
+def test_kernels_use_the_numpy_error_model():
+    """towenv.core.jit.njit compiles with error_model="numpy": a float division by zero gives the IEEE result
+    (which the steps' finiteness checks turn into a reported numerical failure) instead of raising
+    ZeroDivisionError from inside a kernel."""
+    import math
+
+    @jit.njit(cache=False)
+    def ratio(a, b):
+        return a / b
+
+    assert ratio(1.0, 0.0) == math.inf
+    assert ratio(-1.0, 0.0) == -math.inf
+    assert math.isnan(ratio(0.0, 0.0))
+    assert ratio(3.0, 2.0) == 1.5

@@ -12,6 +12,15 @@ and the same bits as the unsplit step. Without fast-math the compiled results do
 structure at all (refactors can be checked bit for bit), at no measurable cost (paired runs in
 docs/architecture.md).
 
+Every kernel compiled through :func:`njit` (the Houbolt step and its phases, the loads, the environments' stepper
+and measurement row; the modules that import numba's own ``njit`` — the explicit schemes, the tow-point
+recurrence, the environments' action/observation/reward kernels — keep numba's defaults) also compiles with
+numba's ``error_model="numpy"`` (since 2026-12-05): a float division by zero
+gives ±inf/NaN, which the steps' finiteness checks report as a numerical failure (time, element, cause), instead
+of a compiled zero test before every division and a ``ZeroDivisionError`` raised from deep inside a kernel. The
+arithmetic of every other division is the same IEEE operation, so results are bit for bit those of the Python
+error model (``scripts/trajectory_digest.py``); the step ran 4–8 % faster without the tests (docs/architecture.md).
+
 Numba's cache checks only the source file of the function it compiled, not the files of the kernels that
 function calls: the Houbolt step in ``houbolt.py`` compiled against an older ``cable_loads.py`` would be
 loaded from the cache after ``cable_loads.py`` changed (an upgrade, or a developer's edit). The guard below
@@ -29,6 +38,8 @@ from numba import njit as _njit
 
 #: the fast-math flags every kernel compiles with: none (see the module docstring)
 FASTMATH = False
+#: numba's error model for every kernel: IEEE results for a division by zero, no compiled zero tests
+ERROR_MODEL = "numpy"
 
 #: the package's folders that hold compiled kernels (their ``__pycache__`` holds numba's cache files)
 KERNEL_FOLDERS = ("core", "envs", "linear", "verification")
@@ -37,7 +48,7 @@ STAMP_NAME = "towenv-kernel-sources.sha1"
 
 def njit(*args, **kw):
     kw.setdefault("fastmath", FASTMATH)
-    kw.setdefault("error_model", "numpy")
+    kw.setdefault("error_model", ERROR_MODEL)
     return _njit(*args, **kw)
 
 
