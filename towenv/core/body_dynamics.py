@@ -458,14 +458,27 @@ def _rotational_stiffness(b, ang, chart, vnode, w, bp, btab_n, btab, rho, g, cur
     w2 = scr[5]
     eps_a = 1e-5
     eps_w = 1e-4
+    # damping first: its three loads share the unperturbed attitude, rotated once (each load is evaluated at the
+    # same arguments as when the two estimates alternated per axis)
+    _chart_rotation(ang[0], ang[1], ang[2], chart, b, lam)
+    for k in range(3):
+        vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
     for i in range(3):
         if reduced and i != 1:
-            bkc[b, BK_STIFFNESS + i] = 0.0
             bkc[b, BK_DAMPING + i] = 0.0
             continue
         for k in range(3):
-            ang2[k] = ang[k]
             w2[k] = w[k]
+        w2[i] += eps_w
+        body_loads(b, lam, vb, w2, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
+        cc = -(m[i] - m0[i]) / eps_w
+        bkc[b, BK_DAMPING + i] = cc if cc > 0.0 else 0.0
+    for i in range(3):
+        if reduced and i != 1:
+            bkc[b, BK_STIFFNESS + i] = 0.0
+            continue
+        for k in range(3):
+            ang2[k] = ang[k]
         ang2[i] += eps_a
         _chart_rotation(ang2[0], ang2[1], ang2[2], chart, b, lam)
         for k in range(3):
@@ -473,13 +486,6 @@ def _rotational_stiffness(b, ang, chart, vnode, w, bp, btab_n, btab, rho, g, cur
         body_loads(b, lam, vb, w, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
         kk = -(m[i] - m0[i]) / eps_a
         bkc[b, BK_STIFFNESS + i] = kk if kk > 0.0 else 0.0
-        _chart_rotation(ang[0], ang[1], ang[2], chart, b, lam)
-        for k in range(3):
-            vb[k] = lam[k, 0] * vnode[0] + lam[k, 1] * vnode[1] + lam[k, 2] * vnode[2]
-        w2[i] += eps_w
-        body_loads(b, lam, vb, w2, bp, btab_n, btab, rho, g, cur_b, f, m, bd)
-        cc = -(m[i] - m0[i]) / eps_w
-        bkc[b, BK_DAMPING + i] = cc if cc > 0.0 else 0.0
 
 
 @njit(cache=True)
