@@ -246,7 +246,7 @@ def cmd_simulate(args) -> int:
     if choice is not None and not args.quiet:
         print(f"fidelity: {choice.summary()} — {choice.reason} (docs/fidelity.md)", file=sys.stderr)
     if not args.quiet and not kernels_compiled():
-        print("towenv: compiling the simulator kernels (first run after installing or updating: 0.5–1.5 min of CPU; "
+        print("towenv: compiling the simulator kernels (first run after installing or updating: 20 s to 1.5 min of CPU, by machine; "
               "cached afterwards) — the progress bar starts moving once they are compiled", file=sys.stderr)
     try:
         res = simulate(sim, duration, progress=not args.quiet)

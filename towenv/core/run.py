@@ -83,7 +83,7 @@ def simulate(scene, duration: float, record_interval: float | None = None, progr
 
 def kernels_compiled() -> bool:
     """Whether numba's on-disk cache already holds the compiled time-step kernel (``houbolt.advance``) for
-    this Python; False on the first run after an install or an update, when compiling takes 0.5–1.5 min of CPU
+    this Python; False on the first run after an install or an update, when compiling takes 20 s to 1.5 min of CPU (by machine)
     (numba caches next to the sources, or under ``NUMBA_CACHE_DIR``)."""
     import sys
     from . import kernels
