@@ -424,3 +424,15 @@ def test_cli_fuzz_clear_error_or_finite_result(tmp_path_factory, duration, sets,
         lines = [ln for ln in err.getvalue().splitlines() if "error" in ln]
         assert len(lines) == 1, err.getvalue()
         assert "Traceback" not in err.getvalue()
+
+
+def test_a_division_by_zero_inside_the_step_is_a_reported_divergence():
+    """The kernels compile with numba's numpy error model (towenv/core/jit.py): a zero divisor deep inside the
+    Houbolt step (here a segment's EA set to 0 behind the scene validation's back, so l/EA divides by zero) gives
+    inf/NaN, which the step's finiteness checks turn into a SimulationDivergence with the time and the cause — not a
+    bare ZeroDivisionError from inside a kernel (what the Python error model raised before 2026-12-05)."""
+    sim = towenv.make_simulator("two_part_tow_1", dt=0.05)
+    sim.advance(1.0)
+    sim.system.ea[4] = 0.0
+    with pytest.raises(SimulationDivergence, match=r"t = 1\.0500 s.*non-finite"):
+        sim.advance(1.0)
