@@ -22,6 +22,10 @@ directions, step normalised by the rewards' standard deviation). The policy::
   ``"v2q"`` adds to v2, before the constant, the along-cable channels 0.2–2.0 s *ahead* as predicted by a causal
   linear predictor from the last 10 s of the MRU's motion (``agents/predictor.py``; fitted on its own wave seeds
   and stored in the policy file, :data:`PREDICTED`);
+  ``"v2qa"`` adds to v2q, before the constant, hinges of the predicted along-cable *acceleration* at each lead,
+  sign(a)·max(|a| − c, 0)/:data:`HINGE_SCALE` for the thresholds c of :data:`HINGES` (m/s²): the part of the coming
+  motion beyond what a 1.5 m/s² winch can follow, a nonlinearity the linear v2q class cannot express (the standard
+  winch's acceleration limit binds 27–34 % of the scored time under the committed v2q policy in codes 4–5);
 * ``θ_c`` — one weight vector per sea state of the along-cable gain table (the same schedule as the base).
 
 θ = 0 is the along-cable law exactly. The policy is causal: it acts on the observation vector and its own
@@ -70,15 +74,21 @@ GAIN_KEYS = ("g_ff", "tau", "kl", "kp", "kd")
 EXTRA_SCALES = {"winch_speed": (0.0, 0.284), "last_action": (0.0, 0.320), "top_tension": (0.996, 0.178),
                 "cable_angle": (0.467, 0.0533), "fish_pitch_dev": (0.0, 0.0772), "fish_pitch_rate": (0.0, 0.190)}
 #: feature sets: name -> extra instant channels after the v1 features (before the constant)
-FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES), "v3": tuple(EXTRA_SCALES), "v2q": tuple(EXTRA_SCALES)}
+FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES), "v3": tuple(EXTRA_SCALES), "v2q": tuple(EXTRA_SCALES),
+                "v2qa": tuple(EXTRA_SCALES)}
 #: feature sets that add, before the constant, the along-cable channels 0.2–2.0 s ahead as predicted by the policy's
 #: own causal linear predictor (agents/predictor.py, stored in the policy file) from 10 s of MRU history
-PREDICTED = frozenset({"v2q"})
+PREDICTED = frozenset({"v2q", "v2qa"})
+#: feature sets that add, after the predicted ones, hinges of the predicted along-cable acceleration at every lead:
+#: name -> thresholds c (m/s²); the feature is sign(a)·max(|a| − c, 0)/HINGE_SCALE, a in m/s²
+HINGES = {"v2qa": (1.0, 1.5)}
+#: scale of a hinge feature (m/s²): a prediction 0.5 m/s² beyond its threshold gives 1
+HINGE_SCALE = 0.5
 #: lagged channels a feature set adds after its extra instant channels: name -> ((channel, lags in control steps),
 #: …). "v3": the policy's own earlier actions (0.2–1.1 s back: with them the residual is a recursive filter, which
 #: can shape its command to the winch's acceleration limit) and the MRU along-cable velocity 2.4–4 s back (a longer
 #: window for the predictor of the tow point's motion). Scaled as the channel's instant or v1 feature.
-LONG_HISTORY = {"v1": (), "v2": (), "v2q": (),
+LONG_HISTORY = {"v1": (), "v2": (), "v2q": (), "v2qa": (),
                 "v3": (("last_action", (1, 2, 3, 4, 6, 8, 10)), ("tow_vel_along", (24, 28, 32, 36, 40)))}
 #: the feature set of new training runs (policy files without a ``feature_set`` entry are "v1")
 DEFAULT_FEATURE_SET = "v2"
@@ -102,8 +112,9 @@ def feature_names(feature_set: str = "v1") -> list[str]:
     extra = FEATURE_SETS[_check_feature_set(feature_set)]
     long = [f"{c}@-{lag / 10:.1f}s" for c, lags in LONG_HISTORY[feature_set] for lag in lags]
     if feature_set in PREDICTED:
-        from .predictor import feature_names as predicted_names
-        long = long + predicted_names()
+        from .predictor import LEADS, feature_names as predicted_names
+        long = long + predicted_names() + [f"hinge{c:g}(tow_acc_along@+{lead / 10:.1f}s(pred))"
+                                           for c in HINGES.get(feature_set, ()) for lead in LEADS]
     return ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
             + list(extra) + long + ["const"])
 
@@ -196,6 +207,16 @@ class ARSPolicy:
         return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
 
 
+def hinge_features(predictor, predicted, thresholds) -> np.ndarray:
+    """(n, len(thresholds)·len(LEADS)) hinge features of the predicted along-cable acceleration (the predictor's
+    second channel, stored scaled by its channel scale) for predictions (n, 3·len(LEADS)); threshold-major."""
+    from .predictor import LEADS
+    L = len(LEADS)
+    acc = predicted[:, L:2 * L] * predictor.scales[1]                # m/s²
+    return np.concatenate([np.sign(acc) * np.maximum(np.abs(acc) - c, 0.0) / HINGE_SCALE for c in thresholds],
+                          axis=1) if thresholds else np.zeros((acc.shape[0], 0))
+
+
 def _extra_single(reader, obs, name):
     v = reader(obs, name)
     return float(np.asarray(v).reshape(-1)[0])
@@ -231,7 +252,10 @@ def features_single(reader, obs, scales, hist, feature_set: str = "v1", predicto
     if pred:
         x = predictor.sample([[reader(obs, c) for c in PRED_CHANNELS]])
         lring = push(None if lring is None else lring[None], x, lring is None)[0]
-        phi.append(predictor.predict(lring[None], [pkey])[0])
+        pr = predictor.predict(lring[None], [pkey])
+        phi.append(pr[0])
+        if HINGES.get(feature_set):
+            phi.append(hinge_features(predictor, pr, HINGES[feature_set])[0])
         ring = (ring, lring)
     return np.concatenate(phi + [[1.0]]), ring
 
@@ -252,6 +276,7 @@ class _Batch:
         self.extra = FEATURE_SETS[feature_set]
         self.long = LONG_HISTORY[feature_set]
         self.long_size = _long_ring_size(feature_set)
+        self.hinges = HINGES.get(feature_set, ())
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales
@@ -303,7 +328,10 @@ class _Batch:
         if self.predictor is not None:
             x = self.predictor.sample(np.stack([self.ch(obs, c) for c in PRED_CHANNELS], axis=1))
             self.pring = push(getattr(self, "pring", None), x, first)
-            parts.append(self.predictor.predict(self.pring, self.pkeys))
+            pr = self.predictor.predict(self.pring, self.pkeys)
+            parts.append(pr)
+            if self.hinges:
+                parts.append(hinge_features(self.predictor, pr, self.hinges))
         return np.concatenate(parts + [np.ones((n, 1))], axis=1)
 
 

@@ -243,7 +243,8 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
                     "and pitch rate") + (" and its own earlier actions and a longer MRU velocity history"
                                          if fs == "v3" else "") + (
                 " and the along-cable motion 0.2-2.0 s ahead predicted from 10 s of MRU history (agents/predictor.py)"
-                if fs == "v2q" else "")
+                if fs in ("v2q", "v2qa") else "") + (
+                " and hinges of its predicted along-cable acceleration beyond 1.0 and 1.5 m/s²" if fs == "v2qa" else "")
             if gn:
                 desc = "Gauss-Newton policy search (the ARS policy class)"
             desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "

@@ -14,6 +14,9 @@ converged), evidence against the class but not a proof.
     python scripts/probe_class_bound.py --init agents/trained/gnqp2_WinchPayout-v0_s1.npz --iterations 3 --export runs/class_bound/fit300_s1.npz
     python scripts/evaluate.py runs/class_bound/fit300_s1.npz --also agents/trained/gnqp2_WinchPayout-v0_s1.npz --episodes 4 5 6 7 8 9 10 11 --replicates 2 --seed-set eval --baselines fixed_winch along_cable clairvoyant --no-plots --name class_bound --out-dir runs/class_bound
 
+``--features v2qa`` fits the richer class (v2q + hinges of the predicted along-cable acceleration) from the same
+start, its extra weights at 0: does a nonlinearity aimed at the winch's acceleration limit raise the class's optimum?
+
 The fitted file is a probe artefact (``meta["probe"]`` says so): it has seen the evaluation set and must never be
 committed or reported as a policy. The search's settings are the committed ``gnqp2`` continuation's (three
 replicates → here the evaluation set's two, ridges 0.01-100, pitch weight 0.1, codes 4-5, feature set v2q with the
@@ -51,6 +54,9 @@ def main(argv=None) -> int:
     ap.add_argument("--episode-seconds", type=float, default=EPISODE_SECONDS,
                     help=f"length of the fitted episodes (default {EPISODE_SECONDS:g} s: the evaluation's, so the fit "
                          "sees the whole scored window; the search's own default, 180 s, fits only its first 120 s)")
+    ap.add_argument("--features", choices=("v2q", "v2qa"), default="v2q",
+                    help="policy class fitted: v2q (the committed policies', default) or the richer v2qa (v2q + hinges "
+                         "of the predicted along-cable acceleration, agents/ars.py; its extra weights start at 0)")
     ap.add_argument("--export", required=True, help="where the fitted probe file goes (e.g. runs/class_bound/...)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= 10:
@@ -67,11 +73,11 @@ def main(argv=None) -> int:
         init = ars.load_ars_policy(a.init)
     except (OSError, ValueError) as e:
         ap.error(f"--init: {e}")
-    if init.feature_set != "v2q":
-        ap.error(f"--init: feature set {init.feature_set}, this probe continues a v2q policy")
+    if init.feature_set not in ("v2q", a.features):
+        ap.error(f"--init: feature set {init.feature_set}, this probe continues a v2q or {a.features} policy")
     pol = gn.train(seed=int(init.meta.get("seed", 0)), iterations=a.iterations, minutes=a.minutes,
                    replicates=REPLICATES, ridges=(0.01, 0.1, 1.0, 10.0, 100.0), pitch_weight=a.pitch_weight,
-                   feature_set="v2q", entries=list(ENTRIES), init=init, episode_seconds=a.episode_seconds,
+                   feature_set=a.features, entries=list(ENTRIES), init=init, episode_seconds=a.episode_seconds,
                    wave_seed=lambda base, it, seed, line_search=False: eval_seed(base))   # all from the eval set
     pol.meta["probe"] = ("in-sample class bound (scripts/probe_class_bound.py): fitted on the evaluation set's "
                          "entries 4-11, wave seeds +0 and +100 — not a policy")

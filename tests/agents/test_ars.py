@@ -55,11 +55,12 @@ def test_zero_weights_are_the_along_cable_law(env):
     assert np.array_equal(a.data["winch_speed"], b.data["winch_speed"])
 
 
-@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3", "v2q"])
+@pytest.mark.parametrize("feature_set", ["v1", "v2", "v3", "v2q", "v2qa"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, feature_set):
     """The policy trained on the vector env is the one evaluated on single envs: same σ to round-off (every
     feature set: v2 adds winch speed, last action, top tension, cable angle, fish pitch and its rate; v3 the
-    policy's own earlier actions and the MRU velocity 2.4–4 s back; v2q the predicted along-cable motion)."""
+    policy's own earlier actions and the MRU velocity 2.4–4 s back; v2q the predicted along-cable motion; v2qa
+    hinges of its predicted acceleration)."""
     from towenv.envs.vector import WinchPayoutVectorEnv
     pol = _policy(scale=0.02, feature_set=feature_set).bind_env(env)
     ev = env.unwrapped.eval_sea_states()
@@ -101,6 +102,36 @@ def test_v2_features_are_the_observed_channels(env):
         assert x == pytest.approx(float(np.asarray(reader(obs, c)).reshape(-1)[0]), rel=1e-12, abs=1e-12)
     # and last_action is the action handed to the last step (float32 round-off)
     assert phi2[names.index("last_action")] * ars.EXTRA_SCALES["last_action"][1] == pytest.approx(0.4, abs=1e-6)
+
+
+def test_v2qa_hinges_are_the_predicted_acceleration_beyond_each_threshold(env):
+    """v2qa = the v2q vector with, before the constant, sign(a)·max(|a| − c, 0)/HINGE_SCALE of the predicted
+    along-cable acceleration a (m/s², the v2q feature times the predictor's channel scale) at every lead, for each
+    threshold c; in a code-5 sea some of them are active (nonzero) and each is zero exactly where |a| ≤ c."""
+    from agents.common import ObsReader
+    from agents.predictor import LEADS, Predictor
+    pred = Predictor.load(PREDICTOR)
+    reader = ObsReader(env)
+    sea, seed = env.unwrapped.eval_sea_states()[8]
+    key = nearest_key(pred.W, sea)
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    hq = ha = None
+    names, nq = ars.feature_names("v2qa"), ars.n_features("v2q")
+    L, active = len(LEADS), 0
+    for k in range(int(SECONDS / 0.1) - 1):
+        phq, hq = ars.features_single(reader, obs, ars.FEATURE_SCALES, hq, "v2q", pred, key)
+        pha, ha = ars.features_single(reader, obs, ars.FEATURE_SCALES, ha, "v2qa", pred, key)
+        assert len(pha) == ars.n_features("v2qa") == nq + L * len(ars.HINGES["v2qa"])
+        assert np.array_equal(pha[:nq - 1], phq[:-1]) and pha[-1] == 1.0
+        first = names.index(f"tow_acc_along@+{LEADS[0] / 10:.1f}s(pred)")
+        acc = phq[first:first + L] * pred.scales[1]
+        for j, c in enumerate(ars.HINGES["v2qa"]):
+            h = pha[nq - 1 + j * L: nq - 1 + (j + 1) * L] * ars.HINGE_SCALE
+            assert np.allclose(h, np.sign(acc) * np.maximum(np.abs(acc) - c, 0.0), rtol=1e-12, atol=1e-12)
+            assert np.all(h[np.abs(acc) <= c] == 0.0)
+            active += int(np.count_nonzero(h))
+        obs, *_ = env.step(np.array([0.0], np.float32))
+    assert active > 0
 
 
 def test_v3_long_history_features_are_the_lagged_channels(env):

@@ -173,7 +173,11 @@ def test_command_line_refuses_out_of_range_arguments(capsys):
     assert str(gn.default_export(1, "v3")) == "runs/gn_v3_WinchPayout-v0_s1.npz"
 
 
-@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5", "gnq", "gnq2", "gnqp", "gnqp2"])
+#: Gauss-Newton iterations of the committed gnqa family (its time budget decides)
+GNQA_ITERATIONS = 6
+
+
+@pytest.mark.parametrize("family", ["gn", "gn2", "gn3", "gn4", "gn5", "gnq", "gnq2", "gnqp", "gnqp2", "gnqa"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_committed_policies_ship_load_and_act(seed, family):
     """The committed Gauss-Newton policies (docs/agents.md "Results") are package data of the installed ``agents``,
@@ -184,7 +188,8 @@ def test_committed_policies_ship_load_and_act(seed, family):
     committed predictor, on codes 4-5 only — code 3 keeps ``gn5``'s weights, predicted features at 0; ``gnq2``: 5 more
     from ``gnq`` (budget), the same settings, code 3 still ``gnq``'s weights; ``gnqp``: 1 more from ``gnq2`` with the
     cost's pitch weight 0.2 instead of 0.5; ``gnqp2``: 3 more from ``gnqp``, iterations 49-51 on the second block of
-    wave seeds, with the pitch weight 0.1) and act:
+    wave seeds, with the pitch weight 0.1; ``gnqa``: GNQA_ITERATIONS more from ``gnqp2`` with feature set v2qa — the
+    acceleration hinges added at 0 — the same settings, code 3 still ``gn5``'s weights) and act:
     inside the action box and not the along-cable law itself."""
     from pathlib import Path
 
@@ -200,19 +205,20 @@ def test_committed_policies_ship_load_and_act(seed, family):
         first, its, parent, reps = {"gn2": (10, 6, "gn", 2), "gn3": (16, 8, "gn2", 3), "gn4": (24, 8, "gn3", 3),
                                     "gn5": (32, 7, "gn4", 3), "gnq": (39, 4, "gn5", 3),
                                     "gnq2": (43, 5, "gnq", 3), "gnqp": (48, 1, "gnq2", 3),
-                                    "gnqp2": (49, 3, "gnqp", 3)}[family]
+                                    "gnqp2": (49, 3, "gnqp", 3), "gnqa": (52, GNQA_ITERATIONS, "gnqp2", 3)}[family]
         assert (pol.meta["first_iteration"], pol.meta["iterations"]) == (first, its)
         assert hp["init"] == f"{parent}_WinchPayout-v0_s{seed}" and hp["replicates"] == reps
         assert hp["ridges"] == [0.01, 0.1, 1.0, 10.0, 100.0]
-        assert hp["pitch_weight"] == {"gnqp": 0.2, "gnqp2": 0.1}.get(family, 0.5)
-    assert pol.feature_set == ("v2q" if family in ("gnq", "gnq2", "gnqp", "gnqp2") else "v2")
+        assert hp["pitch_weight"] == {"gnqp": 0.2, "gnqp2": 0.1, "gnqa": 0.1}.get(family, 0.5)
+    fs = {"gnq": "v2q", "gnq2": "v2q", "gnqp": "v2q", "gnqp2": "v2q", "gnqa": "v2qa"}.get(family, "v2")
+    assert pol.feature_set == fs
     assert set(pol.theta) == set(load_tuned()["along_cable"])
-    if family in ("gnq", "gnq2", "gnqp", "gnqp2"):
+    if fs != "v2":
         from agents.predictor import Predictor
         pred = Predictor.load(Path(agents.__file__).parent / "trained" / "predictor_WinchPayout-v0.npz")
         assert all(np.array_equal(pol.predictor.W[k], pred.W[k]) for k in pred.W)
         parent = ars.load_ars_policy(Path(agents.__file__).parent / "trained" / f"gn5_WinchPayout-v0_s{seed}.npz")
-        names, n2 = ars.feature_names("v2q"), ars.feature_names("v2")
+        names, n2 = ars.feature_names(fs), ars.feature_names("v2")
         code3 = "hs0.88_tp4.03"
         assert np.array_equal(pol.theta[code3], [parent.theta[code3][n2.index(nm)] if nm in n2 else 0.0 for nm in names])
         assert pol.meta["hyperparameters"]["entries"] == [4, 5, 6, 7, 8, 9, 10, 11]

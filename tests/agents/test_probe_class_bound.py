@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 import pytest
 
 gym = pytest.importorskip("gymnasium")
@@ -59,3 +61,23 @@ def test_refuses_agents_dir_bad_iterations_and_non_v2q_init(tmp_path, capsys):
         assert ex.value.code == 2 and word in capsys.readouterr().err
     with pytest.raises(ValueError, match="replicate"):
         probe.eval_seed(4000 + 20)
+
+
+def test_features_v2qa_fits_the_richer_class_from_a_v2q_start(tmp_path, monkeypatch):
+    """``--features v2qa`` hands the search the richer class (v2q + acceleration hinges) with the v2q start; the
+    exported file is of that class."""
+    probe = load_script("probe_class_bound")
+    seen = {}
+
+    def fake_train(seed, iterations, minutes, replicates, ridges, pitch_weight, feature_set, entries, init,
+                   episode_seconds, wave_seed):
+        seen["fs"], seen["init_fs"] = feature_set, init.feature_set
+        th = {k: np.concatenate([v[:-1], np.zeros(ars.n_features("v2qa") - len(v)), v[-1:]])
+              for k, v in init.theta.items()}
+        return ars.ARSPolicy(th, init.base_table, meta=dict(init.meta), feature_set="v2qa", predictor=init.predictor)
+
+    monkeypatch.setattr(gn, "train", fake_train)
+    out = tmp_path / "fit.npz"
+    assert probe.main(["--init", str(INIT), "--features", "v2qa", "--export", str(out)]) == 0
+    assert seen == {"fs": "v2qa", "init_fs": "v2q"}
+    assert ars.load_ars_policy(out).feature_set == "v2qa"
