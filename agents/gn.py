@@ -55,7 +55,11 @@ MAX_ITERATIONS = 2 * ITERATIONS_PER_BLOCK
 
 
 def check_training_seed(seed) -> None:
-    """ValueError naming the training seed unless it is 0..9 (100000·seed keeps a run's seeds in its own block)."""
+    """ValueError naming the training seed unless it is an integer 0..9 (100000·seed keeps a run's seeds in its own
+    block; 1.5 or "1" are refused, not truncated)."""
+    import numbers
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise ValueError(f"seed (the training seed) must be an integer in 0..9 (got {seed!r})")
     if not 0 <= int(seed) < 10:
         raise ValueError(f"seed (the training seed) must be in 0..9 (got {seed}; 100000·seed stays in its block)")
 

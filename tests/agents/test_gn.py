@@ -73,6 +73,16 @@ def test_wave_seeds_are_disjoint_from_every_reserved_set():
         gn.train_seed(base[0], 0, 10)
 
 
+def test_training_seed_must_be_an_integer_in_range():
+    """A training seed of 1.5 (or "1", or True) is refused with the field named, not truncated to another run's
+    block of wave seeds; numpy integers 0..9 pass."""
+    for bad in (1.5, "1", True, -1, 10):
+        with pytest.raises(ValueError, match="seed \\(the training seed\\)"):
+            gn.check_training_seed(bad)
+    gn.check_training_seed(np.int64(3))
+    assert gn.train_seed(4000, 0, np.int64(3)) == gn.train_seed(4000, 0, 3)
+
+
 def test_second_seed_block_is_above_every_other_training_set():
     """Iterations past the first block (continuations from iteration 49 on) take seeds of their own: above every
     first-block, ARS (winch and compensator) and compensator Gauss–Newton seed of any training seed 0..9, and
