@@ -272,3 +272,34 @@ def test_training_cost_follows_the_init_chain(tmp_path, capsys):
         with pytest.raises(SystemExit) as ex:
             tc.main([str(f)])
         assert ex.value.code == 2 and msg in capsys.readouterr().err
+
+
+#: Gauss-Newton iterations the one-hour recipe's 57-min budget allowed per seed (three side by side on two cores)
+GNA_ITERATIONS = {0: 7, 1: 6, 2: 7}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_one_hour_recipe_policies_ship_with_their_recipe(seed):
+    """``gna`` (docs/agents.md "The one-hour recipe"): feature set v2qa trained from the along-cable law (no init) on
+    all 12 entries, two replicates, pitch weight 0.2, a 57-min budget — its own wall time under an hour, the whole
+    recipe (the committed predictor is an input, fitted once in ~1 min) — and it acts inside the action box."""
+    from pathlib import Path
+
+    import agents
+    from agents.predictor import Predictor
+    trained = Path(agents.__file__).parent / "trained"
+    pol = ars.load_ars_policy(trained / f"gna_WinchPayout-v0_s{seed}.npz")
+    m, hp = pol.meta, pol.meta["hyperparameters"]
+    assert (m["method"], m["seed"], m["first_iteration"], m["iterations"]) == ("gauss-newton", seed, 0,
+                                                                                    GNA_ITERATIONS[seed])
+    assert hp.get("init") is None and hp["entries"] == list(range(12)) and hp["replicates"] == 2 and hp["pitch_weight"] == 0.2
+    assert hp["minutes"] == 57.0 and 0 < m["wall_seconds"] < 3600.0
+    assert pol.feature_set == "v2qa"
+    pred = Predictor.load(trained / "predictor_WinchPayout-v0.npz")
+    assert all(np.array_equal(pol.predictor.W[k], pred.W[k]) for k in pred.W)
+    env = gym.make(WINCH, episode_seconds=20.0)
+    pol.bind_env(env)
+    sea, s = env.unwrapped.eval_sea_states()[9]
+    from agents.metrics import rollout
+    a = rollout(env, pol, sea, s + 123456)
+    assert np.all(np.abs(a.data["winch_speed"]) <= env.unwrapped.winch_max_speed + 1e-9)
