@@ -80,7 +80,8 @@ FEATURE_SETS = {"v1": (), "v2": tuple(EXTRA_SCALES), "v3": tuple(EXTRA_SCALES), 
 #: own causal linear predictor (agents/predictor.py, stored in the policy file) from 10 s of MRU history
 PREDICTED = frozenset({"v2q", "v2qa"})
 #: feature sets that add, after the predicted ones, hinges of the predicted along-cable acceleration at every lead:
-#: name -> thresholds c (m/s²); the feature is sign(a)·max(|a| − c, 0)/HINGE_SCALE, a in m/s²
+#: name -> thresholds c (m/s²); the feature is sign(a)·max(|a| − c, 0)/HINGE_SCALE, a in m/s². Fixed physical values
+#: chosen for the standard winch (1.5 m/s²: 2/3 of its limit and the limit itself), not scaled to another winch class
 HINGES = {"v2qa": (1.0, 1.5)}
 #: scale of a hinge feature (m/s²): a prediction 0.5 m/s² beyond its threshold gives 1
 HINGE_SCALE = 0.5
@@ -213,8 +214,7 @@ def hinge_features(predictor, predicted, thresholds) -> np.ndarray:
     from .predictor import LEADS
     L = len(LEADS)
     acc = predicted[:, L:2 * L] * predictor.scales[1]                # m/s²
-    return np.concatenate([np.sign(acc) * np.maximum(np.abs(acc) - c, 0.0) / HINGE_SCALE for c in thresholds],
-                          axis=1) if thresholds else np.zeros((acc.shape[0], 0))
+    return np.concatenate([np.sign(acc) * np.maximum(np.abs(acc) - c, 0.0) / HINGE_SCALE for c in thresholds], axis=1)
 
 
 def _extra_single(reader, obs, name):
