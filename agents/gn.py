@@ -38,8 +38,8 @@ import numpy as np
 from . import ars
 from .common import nearest_key
 
-__all__ = ["train", "train_seed", "initial_theta", "gauss_newton_steps", "MAX_ITERATIONS", "SEED_OFFSET",
-           "SECOND_BLOCK_OFFSET", "ITERATIONS_PER_BLOCK", "main"]
+__all__ = ["train", "train_seed", "initial_theta", "gauss_newton_steps", "replicates_per_sea_state", "MAX_ITERATIONS",
+           "SEED_OFFSET", "SECOND_BLOCK_OFFSET", "ITERATIONS_PER_BLOCK", "main"]
 
 #: wave seeds of the search: base seed (1000·code + j) + SEED_OFFSET + 200·iteration (+ 100 for the line search)
 #: + 100000·training seed, for iterations 0 … ITERATIONS_PER_BLOCK − 1
@@ -88,10 +88,25 @@ def check_settings(iterations, eps, ridges, replicates, episode_seconds, discard
         raise ValueError(f"iterations must be in 1..{max_iterations} (got {iterations})")
     if not (math.isfinite(eps) and eps > 0) or not ridges or any(not (math.isfinite(r) and r > 0) for r in ridges):
         raise ValueError(f"eps and every ridge must be positive numbers (got eps={eps}, ridges={list(ridges)})")
-    if not 1 <= int(replicates) <= 10:
+    if replicates is not None and not 1 <= int(replicates) <= 10:      # None: the caller checks per sea state
         raise ValueError(f"replicates must be in 1..10 (got {replicates}; 10·replicate stays below the next seed block)")
     if not episode_seconds > discard + 1.0:
         raise ValueError(f"episode_seconds ({episode_seconds}) must exceed discard ({discard}) by more than 1 s")
+
+
+def replicates_per_sea_state(replicates, keys) -> list[int]:
+    """Wave seeds per (sea state, heading) per iteration for every sea state of ``keys`` (sorted, as trained): one
+    integer for all, or one per sea state (more episodes where the cost is noisiest, at the same cost per iteration);
+    ValueError naming ``replicates`` for another count or a value outside 1..10."""
+    reps = [int(r) for r in np.atleast_1d(replicates)]
+    if len(reps) == 1:
+        reps = reps * len(keys)
+    if len(reps) != len(keys):
+        raise ValueError(f"replicates: give one count or one per trained sea state ({len(keys)}: {', '.join(keys)}; "
+                         f"got {list(np.atleast_1d(replicates))})")
+    if any(not 1 <= r <= 10 for r in reps):
+        raise ValueError(f"replicates must be in 1..10 (got {reps}; 10·replicate stays below the next seed block)")
+    return reps
 
 
 def first_iteration(init, iterations, max_iterations=MAX_ITERATIONS) -> int:
@@ -156,14 +171,16 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     :class:`agents.ars.ARSPolicy` of any feature set: its weights are copied by feature name, features it does not
     have start at 0; its along-cable table is kept; the iterations continue its count, so the wave seeds are fresh).
     Stops after ``iterations`` more or when the next iteration would pass ``minutes`` of wall time. ``entries``:
-    indices into the evaluation (sea state, heading) list to train on (default all 12). ``predictor``: the causal
+    indices into the evaluation (sea state, heading) list to train on (default all 12). ``replicates``: wave seeds per
+    (sea state, heading) per iteration, one count or one per trained sea state (:func:`replicates_per_sea_state`).
+    ``predictor``: the causal
     predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default ``init``'s). ``wave_seed``:
     ``f(base seed + 10·replicate, iteration, seed, line_search) -> wave seed`` of every episode (default
     :func:`train_seed`; ``scripts/probe_class_bound.py`` passes the evaluation set's own seeds)."""
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import WinchPayoutVectorEnv
     from .baselines import load_tuned
-    check_settings(iterations, eps, ridges, replicates, episode_seconds, discard)
+    check_settings(iterations, eps, ridges, None, episode_seconds, discard)
     check_training_seed(seed)
     # the line search's episodes are fresh (other seeds than the Jacobian's) with the training seeds; a caller's
     # wave_seed (the class-bound probe: the evaluation's own episodes) says nothing of the kind
@@ -181,9 +198,13 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     if not table:
         raise RuntimeError("no tuned along_cable table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
     ev, idx, keys = training_entries(ars.ENV_ID, table, entries)
-    C, NF, R = len(keys), ars.n_features(feature_set), int(replicates)
+    C, NF = len(keys), ars.n_features(feature_set)
+    reps_by_code = replicates_per_sea_state(replicates, keys)
+    entry_code = {i: keys.index(nearest_key(table, ev[i][0])) for i in idx}
+    # (replicate, entry) pairs of every iteration: replicate-major, so a uniform count keeps the historical order
+    pairs = [(r, i) for r in range(max(reps_by_code)) for i in idx if r < reps_by_code[entry_code[i]]]
     ridges = [float(r) for r in ridges]
-    n_ep = len(idx) * R
+    n_ep = len(pairs)
     n_jac, n_ls = n_ep * (NF + 1), n_ep * (len(ridges) + 2)
     kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds))
     venv_j = WinchPayoutVectorEnv(num_envs=n_jac, **kw)
@@ -201,8 +222,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
         if time.perf_counter() - t_start + last > 60.0 * minutes:
             break
         t0 = time.perf_counter()
-        ents = [(ev[i][0], ev[i][1]) for _r in range(R) for i in idx]
-        reps = [r for r in range(R) for _i in idx]
+        ents = [(ev[i][0], ev[i][1]) for _r, i in pairs]
+        reps = [r for r, _i in pairs]
         code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
         seas = [sea for sea, _s in ents]
         # 1. Jacobian: copy block 0 runs θ, block i + 1 runs θ + ε e_i
@@ -264,7 +285,9 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     meta = {"algo": "ars", "method": "gauss-newton", "env_id": ars.ENV_ID, "env_kwargs": {},
             "feature_set": feature_set, "seed": int(seed), "iterations": it - first, "first_iteration": first,
             "num_timesteps": (it - first) * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
-            "hyperparameters": {"iterations": iterations, "minutes": minutes, "replicates": R, "eps": eps,
+            "hyperparameters": {"iterations": iterations, "minutes": minutes,
+                                "replicates": reps_by_code[0] if len(set(reps_by_code)) == 1 else reps_by_code,
+                                "eps": eps,
                                 "ridges": ridges, "pitch_weight": pitch_weight, "episode_seconds": episode_seconds,
                                 "discard": discard, "entries": idx,
                                 "init": init.name if init is not None else None},
@@ -296,7 +319,9 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="training seed (the training wave seeds)")
     ap.add_argument("--iterations", type=int, default=10, help=f"1..{MAX_ITERATIONS} (default 10)")
     ap.add_argument("--minutes", type=float, default=55.0, help="wall-clock budget (default 55)")
-    ap.add_argument("--replicates", type=int, default=1, help="wave seeds per (sea state, heading) per iteration")
+    ap.add_argument("--replicates", type=int, nargs="+", default=[1],
+                    help="wave seeds per (sea state, heading) per iteration: one count, or one per trained sea state "
+                         "(in the order of increasing Hs)")
     ap.add_argument("--eps", type=float, default=0.005, help="finite-difference step of a weight")
     ap.add_argument("--ridges", type=float, nargs="+", default=[0.01, 0.1, 1.0],
                     help="ridge weights tried by the line search (relative to the normal matrix's mean diagonal)")
@@ -315,7 +340,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
-    if not 1 <= a.replicates <= 10 or a.pitch_weight < 0:
+    if any(not 1 <= r <= 10 for r in a.replicates) or a.pitch_weight < 0:
         ap.error("need 1 <= --replicates <= 10 and --pitch-weight >= 0")
     try:
         check_training_seed(a.seed)
@@ -337,7 +362,8 @@ def main(argv=None) -> int:
     predictor = load_option(ap, a.predictor)
     out = Path(a.export or default_export(a.seed, a.features))
     try:
-        pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight,
+        reps = a.replicates[0] if len(a.replicates) == 1 else a.replicates
+        pol = train(a.seed, a.iterations, a.minutes, reps, a.eps, a.ridges, a.pitch_weight,
                     feature_set=a.features, entries=a.entries, init=init, predictor=predictor)
     except ValueError as e:
         ap.error(str(e))
