@@ -117,6 +117,29 @@ def test_bad_settings_are_refused_naming_the_field(kw, field):
         gn.train(**kw)
 
 
+def test_replicates_per_sea_state_add_episodes_only_where_asked():
+    """``replicates=(1, 1, 2)``: the third sea state's heading runs with replicates 0 and 1 (wave seed + 10), the others
+    with replicate 0 only, and the Jacobian and line search use the same episodes; the file records the counts. A
+    uniform count keeps one value and the historical replicate-major episode order (committed recipes' seeds)."""
+    calls = []
+
+    def recorded(base, it, seed, line_search=False):
+        calls.append((base, line_search))
+        return gn.train_seed(base, it, seed, line_search)
+
+    pol = gn.train(seed=3, iterations=1, entries=[0, 4, 8], replicates=(1, 1, 2), episode_seconds=62.0,
+                   discard=60.0, progress=False, wave_seed=recorded)
+    assert sorted({b for b, ls in calls if not ls}) == sorted({b for b, ls in calls if ls}) == [3000, 4000, 5000, 5010]
+    assert pol.meta["hyperparameters"]["replicates"] == [1, 1, 2]
+    assert gn.replicates_per_sea_state(2, ["a", "b", "c"]) == [2, 2, 2]
+    with pytest.raises(ValueError, match="replicates.*one per trained sea state"):
+        gn.replicates_per_sea_state((1, 2), ["a", "b", "c"])
+    with pytest.raises(ValueError, match="replicates must be in 1..10"):
+        gn.replicates_per_sea_state((1, 11, 2), ["a", "b", "c"])
+    with pytest.raises(ValueError, match="replicates"):
+        gn.train(replicates=(1, 2))            # three sea states trained by default
+
+
 def test_initial_theta_copies_weights_by_feature_name(trained):
     """A warm start keeps the initial policy's weights on the features both sets have (by name: the v3 set inserts
     its long history before the constant) and starts the new ones at 0; no init is θ = 0 (the along-cable law)."""
@@ -172,7 +195,7 @@ def test_v2q_search_carries_its_predictor_and_keeps_untrained_sea_states(trained
 
 def test_command_line_refuses_out_of_range_arguments(capsys):
     for bad in (["--iterations", str(gn.MAX_ITERATIONS + 1)], ["--eps", "0"], ["--ridges", "-1"],
-                ["--replicates", "0"], ["--replicates", "11"], ["--seed", "10"]):
+                ["--replicates", "0"], ["--replicates", "11"], ["--replicates", "1", "0", "2"], ["--seed", "10"]):
         with pytest.raises(SystemExit) as ex:
             gn.main(bad)
         assert ex.value.code == 2
