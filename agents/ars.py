@@ -83,6 +83,10 @@ PREDICTED = frozenset({"v2q", "v2qa"})
 #: name -> thresholds c (m/s²); the feature is sign(a)·max(|a| − c, 0)/HINGE_SCALE, a in m/s². Fixed physical values
 #: chosen for the standard winch (1.5 m/s²: 2/3 of its limit and the limit itself), not scaled to another winch class
 HINGES = {"v2qa": (1.0, 1.5)}
+#: the winch acceleration limit (m/s²) the hinge thresholds were set for: the standard winch class's. Acting on an
+#: environment with another limit warns (the thresholds, and any weights trained on them, mean something else
+#: there); training on one is refused (:func:`check_hinge_winch`)
+HINGE_WINCH_ACCELERATION = 1.5
 #: scale of a hinge feature (m/s²): a prediction 0.5 m/s² beyond its threshold gives 1
 HINGE_SCALE = 0.5
 #: lagged channels a feature set adds after its extra instant channels: name -> ((channel, lags in control steps),
@@ -180,6 +184,7 @@ class ARSPolicy:
         self.base = AlongCableWinch(env, table=self.base_table)
         self.reader = self.base.reader
         _require_channels(self.reader, self.feature_set, "ARSPolicy")
+        check_hinge_winch(env, self.feature_set, f"ARSPolicy {self.name}", error=False)
         self.u = env.unwrapped
         return self
 
@@ -206,6 +211,24 @@ class ARSPolicy:
         a = min(max(a_base + float(self._th @ phi), -1.0), 1.0)
         out = np.array([a], np.float32)
         return (out[None, :] if np.asarray(obs).ndim == 2 else out), state
+
+
+def check_hinge_winch(env, feature_set: str, who: str, error: bool) -> None:
+    """Warn (``error=False``: a trained policy acting) or raise ValueError (training) when ``feature_set`` has hinges
+    (:data:`HINGES`) and ``env``'s winch acceleration limit is not :data:`HINGE_WINCH_ACCELERATION`."""
+    if not HINGES.get(feature_set):
+        return
+    a_max = float(getattr(getattr(env, "unwrapped", env), "winch_max_acceleration", HINGE_WINCH_ACCELERATION))
+    if a_max == HINGE_WINCH_ACCELERATION:
+        return
+    msg = (f"{who}: feature set {feature_set!r} has hinges of the predicted acceleration at "
+           f"{', '.join(f'{c:g}' for c in HINGES[feature_set])} m/s², set for a winch acceleration limit of "
+           f"{HINGE_WINCH_ACCELERATION:g} m/s² (the standard winch); this environment's winch_max_acceleration is "
+           f"{a_max:g} m/s²")
+    if error:
+        raise ValueError(msg + " - train feature set 'v2q' for another winch class")
+    import warnings
+    warnings.warn(msg + " - the policy acts, but outside the winch it was designed and trained for", stacklevel=3)
 
 
 def hinge_features(predictor, predicted, thresholds) -> np.ndarray:
@@ -277,6 +300,7 @@ class _Batch:
         self.long = LONG_HISTORY[feature_set]
         self.long_size = _long_ring_size(feature_set)
         self.hinges = HINGES.get(feature_set, ())
+        check_hinge_winch(venv.envs[0], feature_set, "ARS training", error=True)
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales

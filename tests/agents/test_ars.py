@@ -104,6 +104,32 @@ def test_v2_features_are_the_observed_channels(env):
     assert phi2[names.index("last_action")] * ars.EXTRA_SCALES["last_action"][1] == pytest.approx(0.4, abs=1e-6)
 
 
+def test_hinged_policy_warns_on_another_winch_and_training_refuses_it():
+    """The v2qa hinge thresholds are physical values set for the standard winch's 1.5 m/s²: a committed v2qa policy
+    bound to the high-performance winch (2.5 m/s²) warns, naming both limits; the batched training refuses that
+    winch naming winch_max_acceleration; v2q (no hinges) and the standard winch pass silently."""
+    import warnings
+
+    from agents.predictor import Predictor
+    from towenv.envs.vector import WinchPayoutVectorEnv
+    assert towenv.envs.winch.WINCH_CLASSES["standard"]["max_acceleration"] == ars.HINGE_WINCH_ACCELERATION
+    pol = ars.load_ars_policy(PREDICTOR.parent / "gnqa_WinchPayout-v0_s0.npz")
+    fast = gym.make(WINCH, winch_class="high_performance")
+    with pytest.warns(UserWarning, match=r"winch_max_acceleration is 2.5 m/s².*1.5 m/s²|1.5 m/s².*2.5 m/s²"):
+        pol.bind_env(fast)
+    std = gym.make(WINCH)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pol.bind_env(std)
+    fast.close(), std.close()
+    pred = Predictor.load(PREDICTOR)
+    venv = WinchPayoutVectorEnv(num_envs=1, winch_class="high_performance")
+    with pytest.raises(ValueError, match="winch_max_acceleration"):
+        ars._Batch(venv, load_tuned()["along_cable"], dict(ars.FEATURE_SCALES), "v2qa", pred)
+    ars._Batch(venv, load_tuned()["along_cable"], dict(ars.FEATURE_SCALES), "v2q", pred)     # no hinges: fine
+    venv.close()
+
+
 def test_v2qa_hinges_are_the_predicted_acceleration_beyond_each_threshold(env):
     """v2qa = the v2q vector with, before the constant, sign(a)·max(|a| − c, 0)/HINGE_SCALE of the predicted
     along-cable acceleration a (m/s², the v2q feature times the predictor's channel scale) at every lead, for each
