@@ -297,25 +297,31 @@ def test_training_cost_follows_the_init_chain(tmp_path, capsys):
         assert ex.value.code == 2 and msg in capsys.readouterr().err
 
 
-#: Gauss-Newton iterations the one-hour recipe's 57-min budget allowed per seed (three side by side on two cores)
-GNA_ITERATIONS = {0: 7, 1: 6, 2: 7}
+#: Gauss-Newton iterations the one-hour recipes' 57-min budget allowed per seed (three side by side on two cores):
+#: ``gna`` (two BLAS threads per process, the OpenBLAS default then) and ``gnr`` (one, scripts/train_gn.py's default)
+RECIPE_ITERATIONS = {"gna": {0: 7, 1: 6, 2: 7}, "gnr": {0: GNR0, 1: GNR1, 2: GNR2}}
+#: the recipes' replicates and pitch weight: ``gnr`` takes 1 / 2 / 3 replicates in codes 3 / 4 / 5
+RECIPE_SETTINGS = {"gna": (2, 0.2), "gnr": ([1, 2, 3], 0.1)}
 
 
+@pytest.mark.parametrize("family", ["gna", "gnr"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_one_hour_recipe_policies_ship_with_their_recipe(seed):
-    """``gna`` (docs/agents.md "The one-hour recipe"): feature set v2qa trained from the along-cable law (no init) on
-    all 12 entries, two replicates, pitch weight 0.2, a 57-min budget — its own wall time under an hour, the whole
-    recipe (the committed predictor is an input, fitted once in ~1 min) — and it acts inside the action box."""
+def test_one_hour_recipe_policies_ship_with_their_recipe(seed, family):
+    """``gna``/``gnr`` (docs/agents.md "The one-hour recipe"): feature set v2qa trained from the along-cable law (no
+    init) on all 12 entries with the recipe's replicates and pitch weight, a 57-min budget — its own wall time under
+    an hour, the whole recipe (the committed predictor is an input, fitted once in ~1 min) — and it acts inside the
+    action box."""
     from pathlib import Path
 
     import agents
     from agents.predictor import Predictor
     trained = Path(agents.__file__).parent / "trained"
-    pol = ars.load_ars_policy(trained / f"gna_WinchPayout-v0_s{seed}.npz")
+    pol = ars.load_ars_policy(trained / f"{family}_WinchPayout-v0_s{seed}.npz")
     m, hp = pol.meta, pol.meta["hyperparameters"]
     assert (m["method"], m["seed"], m["first_iteration"], m["iterations"]) == ("gauss-newton", seed, 0,
-                                                                                    GNA_ITERATIONS[seed])
-    assert hp.get("init") is None and hp["entries"] == list(range(12)) and hp["replicates"] == 2 and hp["pitch_weight"] == 0.2
+                                                                                    RECIPE_ITERATIONS[family][seed])
+    assert hp.get("init") is None and hp["entries"] == list(range(12))
+    assert (hp["replicates"], hp["pitch_weight"]) == RECIPE_SETTINGS[family]
     assert hp["minutes"] == 57.0 and 0 < m["wall_seconds"] < 3600.0
     assert pol.feature_set == "v2qa"
     pred = Predictor.load(trained / "predictor_WinchPayout-v0.npz")

@@ -90,3 +90,16 @@ def test_shared_predictor_is_the_one_all_v2q_policies_carry():
     assert P.shared_predictor(pols) is not None and P.shared_predictor(pols[2:]) is None
     with pytest.raises(ValueError, match="different predictors"):
         P.shared_predictor(pols + [SimpleNamespace(predictor=other)])
+
+
+def test_design_is_the_gathered_lags_of_the_ring_and_a_constant():
+    """The regressors are exactly ring[:, :, PRED_LAGS] flattened channel-major with a trailing 1 (the strided copy
+    changes only the speed), for contiguous, strided (a column of a bigger array) and float32 rings; C-contiguous."""
+    rng = np.random.default_rng(5)
+    for shape in [(1, 7, P.RING), (5, 4, P.RING), (40, 7, P.RING)]:
+        r = rng.standard_normal((shape[0], 3) + shape[1:])[:, 1]
+        for ring in (r, np.ascontiguousarray(r), r.astype(np.float32)):
+            X = P.Predictor.design(ring)
+            want = np.concatenate([np.asarray(ring, float)[:, :, list(P.PRED_LAGS)].reshape(shape[0], -1),
+                                   np.ones((shape[0], 1))], axis=1)
+            assert X.dtype == np.float64 and X.flags.c_contiguous and np.array_equal(X, want)
