@@ -173,8 +173,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     Stops after ``iterations`` more or when the next iteration would pass ``minutes`` of wall time. ``entries``:
     indices into the evaluation (sea state, heading) list to train on (default all 12). ``replicates``: wave seeds per
     (sea state, heading) per iteration, one count or one per trained sea state (:func:`replicates_per_sea_state`).
-    ``predictor``: the causal
-    predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default ``init``'s). ``wave_seed``:
+    ``predictor``: the causal predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default
+    ``init``'s). ``wave_seed``:
     ``f(base seed + 10·replicate, iteration, seed, line_search) -> wave seed`` of every episode (default
     :func:`train_seed`; ``scripts/probe_class_bound.py`` passes the evaluation set's own seeds)."""
     import towenv  # noqa: F401  (registers the ids)
@@ -321,7 +321,7 @@ def main(argv=None) -> int:
     ap.add_argument("--minutes", type=float, default=55.0, help="wall-clock budget (default 55)")
     ap.add_argument("--replicates", type=int, nargs="+", default=[1],
                     help="wave seeds per (sea state, heading) per iteration: one count, or one per trained sea state "
-                         "(in the order of increasing Hs)")
+                         "(in the order of the sea-state keys, increasing Hs for the evaluation list)")
     ap.add_argument("--eps", type=float, default=0.005, help="finite-difference step of a weight")
     ap.add_argument("--ridges", type=float, nargs="+", default=[0.01, 0.1, 1.0],
                     help="ridge weights tried by the line search (relative to the normal matrix's mean diagonal)")
