@@ -4,7 +4,7 @@
 
 One BLAS thread unless OPENBLAS_NUM_THREADS/OMP_NUM_THREADS say otherwise: the seeds run side by side on the cores,
 and the predictor's matrix products with two OpenBLAS threads per process on two busy cores were 4x slower (spinning
-threads; docs/agents.md "BLAS threads").
+threads; docs/agents.md "The one-hour recipe that meets the goal").
 """
 import os
 
