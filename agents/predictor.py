@@ -44,7 +44,8 @@ CHANNELS_BY_ENV = {"towenv/WinchPayout-v0": PRED_CHANNELS, "towenv/CompensatorGa
 RING = max(PRED_LAGS) + 1
 #: PRED_LAGS as a slice of the ring (:meth:`Predictor.design`)
 _LAG_SLICE = slice(PRED_LAGS[0], PRED_LAGS[-1] + 1, PRED_LAGS[1] - PRED_LAGS[0])
-assert tuple(range(RING)[_LAG_SLICE]) == PRED_LAGS, "PRED_LAGS must be an arithmetic range"
+if tuple(range(RING)[_LAG_SLICE]) != PRED_LAGS:
+    raise RuntimeError("agents.predictor: PRED_LAGS must be an arithmetic range (Predictor.design slices the ring)")
 #: wave seeds of the fitting episodes: base seed (1000·code + j) + 97000 + 10·replicate, replicate < 10
 PREDICTOR_SEED_OFFSET = 97000
 MAX_REPLICATES = 10

@@ -140,6 +140,25 @@ def test_replicates_per_sea_state_add_episodes_only_where_asked():
         gn.train(replicates=(1, 2))            # three sea states trained by default
 
 
+def test_training_script_defaults_to_one_blas_thread_and_respects_the_user():
+    """scripts/train_gn.py sets OPENBLAS_NUM_THREADS/OMP_NUM_THREADS to 1 before numpy loads (seeds run side by side;
+    two spinning threads per process made the predictor's products 4x slower) unless the user set them."""
+    import os
+    import subprocess
+    import sys
+    script = Path(__file__).resolve().parents[2] / "scripts" / "train_gn.py"
+    probe = ("import os, runpy, sys; sys.argv = ['train_gn.py', '--help']\n"
+             f"try:\n    runpy.run_path({str(script)!r}, run_name='__main__')\nexcept SystemExit:\n    pass\n"
+             "print(os.environ['OPENBLAS_NUM_THREADS'], os.environ['OMP_NUM_THREADS'])")
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-P", "-c", probe], env=env, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split()[-2:] == ["1", "1"]
+    out = subprocess.run([sys.executable, "-P", "-c", probe], env=env | {"OPENBLAS_NUM_THREADS": "2"},
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0 and out.stdout.split()[-2:] == ["2", "1"], out.stderr[-2000:]
+
+
 def test_initial_theta_copies_weights_by_feature_name(trained):
     """A warm start keeps the initial policy's weights on the features both sets have (by name: the v3 set inserts
     its long history before the constant) and starts the new ones at 0; no init is θ = 0 (the along-cable law)."""
