@@ -214,8 +214,9 @@ class ARSPolicy:
 
 
 def check_hinge_winch(env, feature_set: str, who: str, error: bool) -> None:
-    """Warn (``error=False``: a trained policy acting) or raise ValueError (training) when ``feature_set`` has hinges
-    (:data:`HINGES`) and ``env``'s winch acceleration limit is not :data:`HINGE_WINCH_ACCELERATION`."""
+    """Warn (``error=False``: a trained policy acting) or raise ValueError (the batched rollouts of training and of the
+    comparison scripts) when ``feature_set`` has hinges (:data:`HINGES`) and ``env``'s winch acceleration limit is
+    not :data:`HINGE_WINCH_ACCELERATION` (an env without a winch has no limit to compare: nothing to say)."""
     if not HINGES.get(feature_set):
         return
     a_max = float(getattr(getattr(env, "unwrapped", env), "winch_max_acceleration", HINGE_WINCH_ACCELERATION))
@@ -300,7 +301,7 @@ class _Batch:
         self.long = LONG_HISTORY[feature_set]
         self.long_size = _long_ring_size(feature_set)
         self.hinges = HINGES.get(feature_set, ())
-        check_hinge_winch(venv.envs[0], feature_set, "ARS training", error=True)
+        check_hinge_winch(venv.envs[0], feature_set, "batched ARS/GN rollout (training or comparison)", error=True)
         self.vmax = float(venv.envs[0].winch_max_speed)
         self.table = base_table
         self.scales = scales

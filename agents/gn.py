@@ -30,6 +30,7 @@ design (+900), final (+20000…), clairvoyant-teacher (+30000), ARS-training (+4
 from __future__ import annotations
 
 import math
+import os
 import time
 from pathlib import Path
 
@@ -291,6 +292,7 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
                                 "ridges": ridges, "pitch_weight": pitch_weight, "episode_seconds": episode_seconds,
                                 "discard": discard, "entries": idx,
                                 "init": init.name if init is not None else None},
+            "blas_env": {v: os.environ.get(v) for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")},
             "init_num_timesteps": int(init.meta.get("num_timesteps", 0)) if init is not None else 0,
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)} for iterations < {ITERATIONS_PER_BLOCK}, then "

@@ -129,8 +129,11 @@ def test_replicates_per_sea_state_add_episodes_only_where_asked():
 
     pol = gn.train(seed=3, iterations=1, entries=[0, 4, 8], replicates=(1, 1, 2), episode_seconds=62.0,
                    discard=60.0, progress=False, wave_seed=recorded)
-    assert sorted({b for b, ls in calls if not ls}) == sorted({b for b, ls in calls if ls}) == [3000, 4000, 5000, 5010]
+    # replicate-major, one episode per (replicate, entry): the Jacobian's and the line search's seeds in that order
+    assert [b for b, ls in calls if not ls] == [b for b, ls in calls if ls] == [3000, 4000, 5000, 5010]
     assert pol.meta["hyperparameters"]["replicates"] == [1, 1, 2]
+    import os
+    assert pol.meta["blas_env"] == {v: os.environ.get(v) for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
     assert gn.replicates_per_sea_state(2, ["a", "b", "c"]) == [2, 2, 2]
     with pytest.raises(ValueError, match="replicates.*one per trained sea state"):
         gn.replicates_per_sea_state((1, 2), ["a", "b", "c"])
@@ -141,22 +144,32 @@ def test_replicates_per_sea_state_add_episodes_only_where_asked():
 
 
 def test_training_script_defaults_to_one_blas_thread_and_respects_the_user():
-    """scripts/train_gn.py sets OPENBLAS_NUM_THREADS/OMP_NUM_THREADS to 1 before numpy loads (seeds run side by side;
-    two spinning threads per process made the predictor's products 4x slower) unless the user set them."""
+    """scripts/train_gn.py sets OPENBLAS_NUM_THREADS/OMP_NUM_THREADS to 1 *before numpy loads* (an import hook records
+    the variables at numpy's first import; seeds run side by side, and two spinning threads per process made the
+    predictor's products 4x slower), and leaves both alone when the user set either."""
     import os
     import subprocess
     import sys
     script = Path(__file__).resolve().parents[2] / "scripts" / "train_gn.py"
-    probe = ("import os, runpy, sys; sys.argv = ['train_gn.py', '--help']\n"
+    probe = ("import os, runpy, sys\n"
+             "seen = []\n"
+             "class Hook:\n"
+             "    def find_spec(self, name, path=None, target=None):\n"
+             "        if name == 'numpy' and not seen:\n"
+             "            seen.append((os.environ.get('OPENBLAS_NUM_THREADS'), os.environ.get('OMP_NUM_THREADS')))\n"
+             "        return None\n"
+             "sys.meta_path.insert(0, Hook())\n"
+             "assert 'numpy' not in sys.modules\n"
+             "sys.argv = ['train_gn.py', '--help']\n"
              f"try:\n    runpy.run_path({str(script)!r}, run_name='__main__')\nexcept SystemExit:\n    pass\n"
-             "print(os.environ['OPENBLAS_NUM_THREADS'], os.environ['OMP_NUM_THREADS'])")
+             "print(*seen[0])")
     env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
-    out = subprocess.run([sys.executable, "-P", "-c", probe], env=env, capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split()[-2:] == ["1", "1"]
-    out = subprocess.run([sys.executable, "-P", "-c", probe], env=env | {"OPENBLAS_NUM_THREADS": "2"},
-                         capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0 and out.stdout.split()[-2:] == ["2", "1"], out.stderr[-2000:]
+    for extra, want in (({}, ["1", "1"]), ({"OPENBLAS_NUM_THREADS": "2"}, ["2", "None"]),
+                        ({"OMP_NUM_THREADS": "2"}, ["None", "2"])):
+        out = subprocess.run([sys.executable, "-P", "-c", probe], env=env | extra, capture_output=True, text=True,
+                             timeout=300)
+        assert out.returncode == 0, out.stderr[-2000:]
+        assert out.stdout.split()[-2:] == want, (extra, out.stdout)
 
 
 def test_initial_theta_copies_weights_by_feature_name(trained):

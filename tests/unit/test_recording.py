@@ -231,7 +231,7 @@ def test_step_phases_compile_once_per_process(tmp_path):
     import os
     import subprocess
     import sys
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"} | {"NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     p = subprocess.run([sys.executable, "-P", "-c", _PHASE_SIGNATURES], env=env, capture_output=True, text=True,
                        timeout=900)
     assert p.returncode == 0, p.stderr[-2000:]
