@@ -235,8 +235,7 @@ def check_hinge_winch(env, feature_set: str, who: str, error: bool) -> None:
 def hinge_features(predictor, predicted, thresholds) -> np.ndarray:
     """(n, len(thresholds)·len(LEADS)) hinge features of the predicted along-cable acceleration (the predictor's
     second channel, stored scaled by its channel scale) for predictions (n, 3·len(LEADS)); threshold-major."""
-    from .predictor import LEADS
-    L = len(LEADS)
+    L = predicted.shape[1] // 3                                      # leads per predicted channel
     acc = predicted[:, L:2 * L] * predictor.scales[1]                # m/s²
     return np.concatenate([np.sign(acc) * np.maximum(np.abs(acc) - c, 0.0) / HINGE_SCALE for c in thresholds], axis=1)
 

@@ -198,6 +198,12 @@ GOALS = {
              "stretch: CR ≥ 90 %",
 }
 
+def _hinge_thresholds(feature_set: str) -> tuple:
+    """The hinge thresholds (m/s²) of a WinchPayout ARS/GN feature set (agents/ars.py HINGES; () if none)."""
+    from .ars import HINGES
+    return tuple(HINGES.get(feature_set, ()))
+
+
 def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines: list[str] | None = None,
                    env_kwargs: dict | None = None, replicates: int = 1, indices=None, discard: float | None = None,
                    keep_records: str = "first", n_boot: int = 2000, tuned: dict | None = None,
@@ -244,7 +250,8 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
                                          if fs == "v3" else "") + (
                 " and the along-cable motion 0.2-2.0 s ahead predicted from 10 s of MRU history (agents/predictor.py)"
                 if fs in ("v2q", "v2qa") else "") + (
-                " and hinges of its predicted along-cable acceleration beyond 1.0 and 1.5 m/s²" if fs == "v2qa" else "")
+                " and hinges of its predicted along-cable acceleration beyond "
+                + " and ".join(f"{c:.1f}" for c in _hinge_thresholds(fs)) + " m/s²" if _hinge_thresholds(fs) else "")
             if gn:
                 desc = "Gauss-Newton policy search (the ARS policy class)"
             desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "

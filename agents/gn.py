@@ -204,6 +204,10 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     entry_code = {i: keys.index(nearest_key(table, ev[i][0])) for i in idx}
     # (replicate, entry) pairs of every iteration: replicate-major, so a uniform count keeps the historical order
     pairs = [(r, i) for r in range(max(reps_by_code)) for i in idx if r < reps_by_code[entry_code[i]]]
+    ents = [(ev[i][0], ev[i][1]) for _r, i in pairs]          # the same (sea state, heading) list every iteration;
+    reps = [r for r, _i in pairs]                             # only the wave seeds change with the iteration
+    code = np.array([entry_code[i] for _r, i in pairs])
+    seas = [sea for sea, _s in ents]
     ridges = [float(r) for r in ridges]
     n_ep = len(pairs)
     n_jac, n_ls = n_ep * (NF + 1), n_ep * (len(ridges) + 2)
@@ -223,10 +227,6 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
         if time.perf_counter() - t_start + last > 60.0 * minutes:
             break
         t0 = time.perf_counter()
-        ents = [(ev[i][0], ev[i][1]) for _r, i in pairs]
-        reps = [r for r, _i in pairs]
-        code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
-        seas = [sea for sea, _s in ents]
         # 1. Jacobian: copy block 0 runs θ, block i + 1 runs θ + ε e_i
         seeds = [wave_seed(s + 10 * r, it, seed) for (_sea, s), r in zip(ents, reps)]
         th = np.repeat(theta[code][None], NF + 1, axis=0)

@@ -5,7 +5,8 @@ which the winch runs at its speed limit (|v| ≥ 0.99 v_max) or changes speed at
     python scripts/winch_limit_use.py agents/trained/gnqp2_WinchPayout-v0_s1.npz --entries 4 8 9 --replicates 2
 
 (the figure behind feature set v2qa, docs/agents.md: the acceleration limit binds 27–34 % of the time in codes 4–5
-under the v2q policy, the speed limit ≤ 0.2 %; under the hinged `gnqa` policy 40–43 %). A policy file (ARS/GN linear residual) or a baseline name.
+under the v2q policy, the speed limit ≤ 0.2 %; under the hinged `gnqa` policy 40–43 %, `gnr` 43–46 %). The controller
+is a policy file (ARS/GN linear residual) or a baseline name.
 """
 import argparse
 import sys
