@@ -204,6 +204,52 @@ def _hinge_thresholds(feature_set: str) -> tuple:
     return tuple(HINGES.get(feature_set, ()))
 
 
+def trained_description(meta: dict) -> str:
+    """The report's one-line description of a trained policy from its file's metadata (algorithm, method, feature
+    set, iterations, start, training seed, residual wrappers)."""
+    desc = f"{meta.get('algo', '?').upper()} policy"
+    gn = meta.get("method") == "gauss-newton"
+    hp = meta.get("hyperparameters") or {}
+    start = (f" after {hp['init']}" if gn and hp.get("init") else "")
+    if meta.get("algo") == "ars":
+        fs = meta.get("feature_set", "v1")
+        more = ("" if fs == "v1" else " and the winch speed, last action, top tension, cable angle, fish pitch "
+                "and pitch rate") + (" and its own earlier actions and a longer MRU velocity history"
+                                     if fs == "v3" else "") + (
+            " and the along-cable motion 0.2-2.0 s ahead predicted from 10 s of MRU history (agents/predictor.py)"
+            if fs in ("v2q", "v2qa") else "") + (
+            " and hinges of its predicted along-cable acceleration beyond "
+            + " and ".join(f"{c:.1f}" for c in _hinge_thresholds(fs)) + " m/s²" if _hinge_thresholds(fs) else "")
+        if gn:
+            desc = "Gauss-Newton policy search (the ARS policy class)"
+        desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
+                 f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
+                 f"seed {meta.get('seed', '?')})")
+    elif meta.get("algo") == "ars_skyhook" and meta.get("trainer") == "probe_semiactive_imitation":
+        desc = ("imitation of clairvoyant semi-active teacher plans (the ARS compensator policy class, ridge "
+                f"{meta.get('ridge', '?')}, {len(meta.get('plans') or [])} plans; "
+                "scripts/probe_semiactive_imitation.py)")
+    elif meta.get("algo") == "ars_skyhook":
+        desc = ("Gauss-Newton policy search (the ARS compensator policy class)" if gn else "ARS policy") + (
+                ", linear residual on `skyhook` over the tow-point heave history and stroke features"
+                + (" and the tow point's vertical motion 0.2-2.0 s ahead predicted from 10 s of MRU history "
+                   "(agents/predictor.py)" if meta.get("feature_set") == "hq" else "")
+                + (", each with a second weight while skyhook damps (feature set hs)"
+                   if meta.get("feature_set") == "hs" else "")
+                + f" ({meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
+                f"seed {meta.get('seed', '?')})")
+    for w in meta.get("env_wrapper") or []:
+        if isinstance(w, dict):
+            for wn, wkw in w.items():
+                if wn.endswith("ResidualAction"):
+                    wkw = dict(wkw or {})
+                    base = wkw.pop("base", "?")
+                    desc += (f", residual on `{base}` (" + ", ".join(f"{k}={v}" for k, v in wkw.items()) + ")")
+                else:
+                    desc += f", wrapper {wn}"
+    return desc
+
+
 def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines: list[str] | None = None,
                    env_kwargs: dict | None = None, replicates: int = 1, indices=None, discard: float | None = None,
                    keep_records: str = "first", n_boot: int = 2000, tuned: dict | None = None,
@@ -239,46 +285,7 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
         penv = make_eval_env(env_id, kw, meta.get("env_wrapper"))
         if hasattr(pol, "bind_env"):        # a policy that reads the sea-state estimate (agents.ars.ARSPolicy)
             pol.bind_env(penv)
-        desc = f"{meta.get('algo', '?').upper()} policy"
-        gn = meta.get("method") == "gauss-newton"
-        hp = meta.get("hyperparameters") or {}
-        start = (f" after {hp['init']}" if gn and hp.get("init") else "")
-        if meta.get("algo") == "ars":
-            fs = meta.get("feature_set", "v1")
-            more = ("" if fs == "v1" else " and the winch speed, last action, top tension, cable angle, fish pitch "
-                    "and pitch rate") + (" and its own earlier actions and a longer MRU velocity history"
-                                         if fs == "v3" else "") + (
-                " and the along-cable motion 0.2-2.0 s ahead predicted from 10 s of MRU history (agents/predictor.py)"
-                if fs in ("v2q", "v2qa") else "") + (
-                " and hinges of its predicted along-cable acceleration beyond "
-                + " and ".join(f"{c:.1f}" for c in _hinge_thresholds(fs)) + " m/s²" if _hinge_thresholds(fs) else "")
-            if gn:
-                desc = "Gauss-Newton policy search (the ARS policy class)"
-            desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
-                     f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
-                     f"seed {meta.get('seed', '?')})")
-        elif meta.get("algo") == "ars_skyhook" and meta.get("trainer") == "probe_semiactive_imitation":
-            desc = ("imitation of clairvoyant semi-active teacher plans (the ARS compensator policy class, ridge "
-                    f"{meta.get('ridge', '?')}, {len(meta.get('plans') or [])} plans; "
-                    "scripts/probe_semiactive_imitation.py)")
-        elif meta.get("algo") == "ars_skyhook":
-            desc = ("Gauss-Newton policy search (the ARS compensator policy class)" if gn else "ARS policy") + (
-                    ", linear residual on `skyhook` over the tow-point heave history and stroke features"
-                    + (" and the tow point's vertical motion 0.2-2.0 s ahead predicted from 10 s of MRU history "
-                       "(agents/predictor.py)" if meta.get("feature_set") == "hq" else "")
-                    + (", each with a second weight while skyhook damps (feature set hs)"
-                       if meta.get("feature_set") == "hs" else "")
-                    + f" ({meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
-                    f"seed {meta.get('seed', '?')})")
-        for w in meta.get("env_wrapper") or []:
-            if isinstance(w, dict):
-                for wn, wkw in w.items():
-                    if wn.endswith("ResidualAction"):
-                        wkw = dict(wkw or {})
-                        base = wkw.pop("base", "?")
-                        desc += (f", residual on `{base}` (" + ", ".join(f"{k}={v}" for k, v in wkw.items()) + ")")
-                    else:
-                        desc += f", wrapper {wn}"
+        desc = trained_description(meta)
         ctrls.append(Controller(name, pol, penv, "trained", desc, meta))
     reuse = dict(reuse or {})
     unknown = [n for n in reuse if n not in names]

@@ -419,3 +419,27 @@ def test_reuse_takes_rows_only_from_a_report_of_the_same_physics(tmp_path, evalu
             evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
                            "--name", "e", *bad, *quick])
         assert ex.value.code == 2
+
+
+@pytest.mark.parametrize("report, family, loader", [
+    ("gnr_WinchPayout-v0", "gnr_WinchPayout-v0", "ars"),
+    ("gns_CompensatorGains-v0", "gns_CompensatorGains-v0", "ars_compensator"),
+])
+def test_trained_description_matches_committed_reports(report, family, loader):
+    """The report's description of a trained policy (feature set, hinge thresholds read from ars.HINGES, gated copy,
+    iterations, start, seed) is a function of the policy file's metadata: the committed files reproduce the
+    committed reports' text exactly (a change of the thresholds or of the wording shows here)."""
+    import importlib
+
+    import agents
+    from agents.evaluation import trained_description
+    repo = Path(__file__).resolve().parents[2]
+    summary = json.loads((repo / "docs" / "reports" / report / "summary.json").read_text())
+    mod = importlib.import_module(f"agents.{loader}")
+    load = mod.load_ars_policy if loader == "ars" else mod.load_policy
+    for seed in range(3):
+        name = f"{family}_s{seed}"
+        pol = load(Path(agents.__file__).parent / "trained" / f"{name}.npz")
+        assert trained_description(pol.meta) == summary["controllers"][name]["description"]
+    if loader == "ars":
+        assert "beyond 1.0 and 1.5 m/s²" in summary["controllers"][f"{family}_s0"]["description"]
