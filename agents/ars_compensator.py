@@ -74,7 +74,8 @@ from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset
 from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, push
 from .predictor import feature_names as predicted_names
 
-__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "ADDED_KINDS", "added_features",
+__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "CABLE", "CABLE_CHANNELS",
+           "CABLE_OFFSETS", "ADDED_KINDS", "added_features",
            "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
            "TRAIN_SEED_OFFSET", "MAX_ITERATIONS", "ALGO", "DEFAULT_HIT_WEIGHT", "DEFAULT_MARGIN_WEIGHT",
@@ -98,7 +99,8 @@ NONLINEAR = ("stroke_abs", "stroke_sq", "stroke_4", "stroke_out", "stroke_out_po
 FEATURE_SCALES = {"tow_vel_z": 1.333, "tow_acc_z": 2.43, "tow_heave": 0.821, "comp_stroke": 0.2596,
                   "comp_stroke_vel": 0.5161, "fish_heave_dev": 0.2817, "fish_heave_rate": 0.2249,
                   "fish_pitch_dev": 0.1161, "fish_pitch_rate": 0.2979, "stroke_abs": 0.1687, "stroke_sq": 0.1059,
-                  "stroke_4": 0.05032, "stroke_out": 0.1397, "stroke_out_pos": 0.0905}
+                  "stroke_4": 0.05032, "stroke_out": 0.1397, "stroke_out_pos": 0.0905,
+                  "top_tension": 0.2969, "tow_vel_along": 0.6825}     # the last two: feature set "hst" (2026-12-06)
 #: wave seeds of training: base seed (1000·code + j) + 50000 + 100·iteration + 100000·training seed
 TRAIN_SEED_OFFSET = 50000
 #: iterations per run: 100·iteration stays below 10000, so the training seeds of one run stay in
@@ -118,16 +120,26 @@ N_ACT = 2
 #: predicted by the policy's own causal linear predictor from the last 10 s of the MRU's vertical motion
 #: (``agents/predictor.py``, :data:`agents.predictor.COMP_PRED_CHANNELS`, stored in the policy file), scaled as the
 #: channel's history features, placed before the constant
-FEATURE_SETS = ("h", "hq", "hs")
+FEATURE_SETS = ("h", "hq", "hs", "hst")
 PREDICTED = frozenset({"hq"})
 #: feature set "hs" = "h" + every "h" feature (the constant included) multiplied by skyhook's switching state
 #: ``on`` = 1 while the sheave's absolute velocity has the stroke velocity's sign (skyhook damps; the same condition
 #: as the base law, read from the same observation), else 0: a residual with separate weights for the damping-on and
 #: damping-off phases (90 features; the gated names are prefixed ``on*``)
-GATED = frozenset({"hs"})
+GATED = frozenset({"hs", "hst"})
 GATE_PREFIX = "on*"
-#: the kinds of features a feature set adds to "h", and the sets that add them
-ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED}
+#: feature set "hst" = "hs" + the cable's state at the sheave: the top tension's deviation from its static value
+#: (``top_tension`` − 1, in units of the static top tension) and the tow point's velocity along the top cable
+#: (``tow_vel_along``, m/s) at the lags :data:`LAG_STEPS`, ungated, after the gated copy (112 features). Under
+#: skyhook the fish heave is poorly explained by the tow point's vertical-motion history alone (leave-one-episode-out
+#: R² of a linear fit on 10 s of it: 0.43 / 0.24 / 0.16 in codes 3 / 4 / 5) and much better with the top tension's
+#: (0.61 / 0.51 / 0.46): the tension carries the cable's dynamic state, which "h" does not see (docs/agents.md)
+CABLE = frozenset({"hst"})
+CABLE_CHANNELS = ("top_tension", "tow_vel_along")
+#: the value subtracted from a cable channel before scaling (the static top tension is 1 in its channel's units)
+CABLE_OFFSETS = {"top_tension": 1.0, "tow_vel_along": 0.0}
+#: the kinds of features a feature set adds to "h", and the sets that add them (a set adding two kinds lists both)
+ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED, "cable": CABLE}
 
 
 def feature_names(feature_set: str = "h") -> list[str]:
@@ -140,6 +152,8 @@ def feature_names(feature_set: str = "h") -> list[str]:
              + list(NONLINEAR) + pred + ["const"])
     if feature_set in GATED:
         names += [GATE_PREFIX + nm for nm in names]
+    if feature_set in CABLE:
+        names += [f"{c}@-{lag / 10:.1f}s" for c in CABLE_CHANNELS for lag in LAG_STEPS]
     return names
 
 
@@ -147,14 +161,24 @@ def feature_names(feature_set: str = "h") -> list[str]:
 N_FEATURES = len(feature_names())
 
 
-def added_features(feature_set: str) -> tuple[str, np.ndarray]:
+def added_features(feature_set: str, kind: str | None = None) -> tuple[str, np.ndarray]:
     """(kind, mask) of the features ``feature_set`` adds to "h": kind "predicted" (hq: the predicted tow-point
-    motion), "gated" (hs: the skyhook-gated copy) or "" (h), and a boolean mask over ``feature_names(feature_set)``."""
+    motion), "gated" (hs: the skyhook-gated copy), "cable" (hst: the top tension and along-cable velocity
+    histories; hst also has the gated copy, so ``kind`` picks which: default the last added) or "" (h), and a
+    boolean mask over ``feature_names(feature_set)``."""
     names = feature_names(feature_set)
-    if feature_set in PREDICTED:
+    kinds = [k for k, sets in ADDED_KINDS.items() if feature_set in sets]
+    if kind is None:
+        kind = kinds[-1] if kinds else ""
+    elif kind not in kinds:
+        return "", np.zeros(len(names), bool)
+    if kind == "predicted":
         return "predicted", np.array([nm.endswith("(pred)") for nm in names])
-    if feature_set in GATED:
+    if kind == "gated":
         return "gated", np.array([nm.startswith(GATE_PREFIX) for nm in names])
+    if kind == "cable":
+        n_cable = len(CABLE_CHANNELS) * len(LAG_STEPS)
+        return "cable", np.arange(len(names)) >= len(names) - n_cable
     return "", np.zeros(len(names), bool)
 
 
@@ -183,10 +207,13 @@ class _Features:
     """φ for a batch of observations ``(n, obs_size)`` with the history ring of every row. The single-environment
     policy uses it with n = 1, so training and deployment share one arithmetic."""
 
-    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gated: bool = False):
+    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gated: bool = False,
+                 cable: bool = False):
         self.reader = reader
         self.half = float(half_stroke)
         self.gated = bool(gated)
+        self.cable = bool(cable)
+        self.chist = None                   # the cable channels' history ring (n, channels, N_HISTORY), newest first
         self.scales = dict(scales)
         self.hist = None
         self.predictor = predictor
@@ -222,6 +249,14 @@ class _Features:
         phi = np.concatenate(parts, axis=1)
         if self.gated:
             phi = np.concatenate([phi, phi * skyhook_on(r, obs)[:, None]], axis=1)
+        if self.cable:
+            c = np.stack([(r.batch(obs, ch) - CABLE_OFFSETS[ch]) / sc[ch] for ch in CABLE_CHANNELS], axis=1)
+            if first or self.chist is None:
+                self.chist = np.repeat(c[:, :, None], N_HISTORY, axis=2)
+            else:
+                self.chist = np.roll(self.chist, 1, axis=2)
+                self.chist[:, :, 0] = c
+            phi = np.concatenate([phi, self.chist[:, :, list(LAG_STEPS)].reshape(n, -1)], axis=1)
         return phi
 
 
@@ -331,7 +366,7 @@ class ARSCompensatorPolicy:
         self.reader = self.base.reader
         self.u = env.unwrapped
         self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor,
-                                gated=self.feature_set in GATED)
+                                gated=self.feature_set in GATED, cable=self.feature_set in CABLE)
         self._th = None
         return self
 
@@ -383,7 +418,8 @@ class _Batch:
         self.kmap, self.bmap = e0.stiffness_range, e0.damping_range
         self.table = base_table
         self.feature_set = feature_set
-        self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gated=feature_set in GATED)
+        self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gated=feature_set in GATED,
+                                  cable=feature_set in CABLE)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS
@@ -464,7 +500,7 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
     return (sh, sp, hits, mg, acts) if record_actions else (sh, sp, hits, mg)
 
 
-def _setup(episode_seconds: float, n_copies: int, scales: dict):
+def _setup(episode_seconds: float, n_copies: int, scales: dict, feature_set: str = "h"):
     import gymnasium as gym
     __import__("towenv")                    # registers the ids
     from towenv.envs.vector import CompensatorGainsVectorEnv
@@ -477,7 +513,7 @@ def _setup(episode_seconds: float, n_copies: int, scales: dict):
     env.close()
     venv = CompensatorGainsVectorEnv(num_envs=n_copies, autoreset_mode="NextStep", batch_infos=True,
                                      episode_seconds=float(episode_seconds))
-    return table, ev, venv, _Batch(venv, table, scales)
+    return table, ev, venv, _Batch(venv, table, scales, feature_set)
 
 
 def measure_scales(seed: int = 0, episode_seconds: float = 180.0) -> dict:
@@ -485,7 +521,7 @@ def measure_scales(seed: int = 0, episode_seconds: float = 180.0) -> dict:
     episodes of iteration 0 of training seed ``seed``, pooled over all steps (how :data:`FEATURE_SCALES` was
     measured)."""
     unit = {k: 1.0 for k in FEATURE_SCALES}
-    probe = _setup(episode_seconds, 12, unit)
+    probe = _setup(episode_seconds, 12, unit, "hst")
     table, ev, venv, batch = probe
     seas = [s for s, _ in ev]
     seeds = [_train_seed(b, 0, seed) for _, b in ev]
@@ -498,9 +534,9 @@ def measure_scales(seed: int = 0, episode_seconds: float = 180.0) -> dict:
         obs, *_ = venv.step(batch.base_action(obs).astype(np.float32))
     venv.close()
     X = np.concatenate(rows, axis=0)
-    names = feature_names()
+    names = feature_names("hst")
     out = {}
-    for c in HISTORY_CHANNELS:
+    for c in HISTORY_CHANNELS + CABLE_CHANNELS:
         out[c] = float(X[:, names.index(f"{c}@-0.0s")].std())
     for c in list(INSTANT_CHANNELS) + list(NONLINEAR):
         out[c] = float(X[:, names.index(c)].std())

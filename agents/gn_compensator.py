@@ -69,18 +69,19 @@ def initial_theta(init, keys, feature_set: str) -> np.ndarray:
 
 def free_mask(feature_set: str, free: str) -> np.ndarray:
     """Which of the (2, n_features) weights the search moves: ``"all"``, or only the features a feature set adds to
-    "h" (:func:`agents.ars_compensator.added_features`): ``"predicted"`` (hq) or ``"gated"`` (hs); the rest stay as
+    "h" (:func:`agents.ars_compensator.added_features`): ``"predicted"`` (hq), ``"gated"`` (hs, hst) or ``"cable"`` (hst:
+    the top-tension and along-cable velocity histories); the rest stay as
     they start. A flat boolean mask over the 2 × n_features weights (row-major, as Θ.reshape(-1))."""
-    kind, added = arc.added_features(feature_set)
     if free == "all":
-        cols = np.ones(len(added), bool)
+        cols = np.ones(arc.n_features(feature_set), bool)
     elif free in arc.ADDED_KINDS:
+        kind, added = arc.added_features(feature_set, free)
         if kind != free:
             raise ValueError(f"free={free!r} needs a feature set with {free} features "
                              f"({', '.join(sorted(arc.ADDED_KINDS[free]))}; got {feature_set!r})")
         cols = added
     else:
-        raise ValueError(f"free must be 'all', 'predicted' or 'gated' (got {free!r})")
+        raise ValueError(f"free must be 'all', {', '.join(repr(k) for k in arc.ADDED_KINDS)} (got {free!r})")
     return np.tile(cols, arc.N_ACT)
 
 
@@ -268,12 +269,13 @@ def main(argv=None) -> int:
     ap.add_argument("--features", default=None, choices=arc.FEATURE_SETS,
                     help="feature set (default: the init policy's, else h); hq adds the predicted tow-point motion "
                          "and needs --predictor (or an hq init); hs adds every h feature gated by skyhook's "
-                         "switching state")
+                         "switching state; hst adds to hs the top tension and along-cable velocity over the last 2 s")
     ap.add_argument("--predictor", default=None, help="predictor file of feature set hq (python -m agents.predictor "
                                                       "--env towenv/CompensatorGains-v0 --out FILE)")
-    ap.add_argument("--free", default="all", choices=("all", "predicted", "gated"),
-                    help="which weights the search moves: all (default), only the predicted features' (hq), or only "
-                         "the skyhook-gated copy's (hs)")
+    ap.add_argument("--free", default="all", choices=("all",) + tuple(arc.ADDED_KINDS),
+                    help="which weights the search moves: all (default), only the predicted features' (hq), only "
+                         "the skyhook-gated copy's (hs, hst), or only the cable features' (hst: top tension and "
+                         "along-cable velocity histories)")
     ap.add_argument("--entries", type=int, nargs="+", default=None,
                     help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
