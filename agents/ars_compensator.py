@@ -25,7 +25,9 @@ constant, the tow point's vertical velocity, acceleration and heave 0.2, 0.4, �
 linear predictor from the last 10 s of the MRU's vertical motion (``agents/predictor.py``, stored in the policy file;
 75 features). On the evaluation set it did not beat "h" (docs/agents.md). Feature set ``"hs"`` adds a copy of every "h"
 feature (the constant included) multiplied by skyhook's switching state (1 while the base law damps, ż_abs·ṡ > 0, else
-0; :func:`skyhook_on`): separate residual weights for the damping-on and damping-off phases (90 features).
+0; :func:`skyhook_on`): separate residual weights for the damping-on and damping-off phases (90 features). Feature
+set ``"hst"`` adds to "hs" the cable's state at the sheave, ungated: the top tension's deviation from its static value
+and the tow point's velocity along the top cable at the same lags (112 features; :data:`CABLE_CHANNELS`).
 
 Θ = 0 is the skyhook law exactly. The policy is causal: it acts on the observation vector and its own memory of
 earlier observations, plus the sea-state estimate at episode start (as the base does).

@@ -234,8 +234,11 @@ def trained_description(meta: dict) -> str:
                 ", linear residual on `skyhook` over the tow-point heave history and stroke features"
                 + (" and the tow point's vertical motion 0.2-2.0 s ahead predicted from 10 s of MRU history "
                    "(agents/predictor.py)" if meta.get("feature_set") == "hq" else "")
-                + (", each with a second weight while skyhook damps (feature set hs)"
-                   if meta.get("feature_set") == "hs" else "")
+                + (", each with a second weight while skyhook damps" if meta.get("feature_set") in ("hs", "hst")
+                   else "")
+                + (", and the top tension and along-cable velocity over the last 2 s"
+                   if meta.get("feature_set") == "hst" else "")
+                + (f" (feature set {meta.get('feature_set')})" if meta.get("feature_set") in ("hs", "hst") else "")
                 + f" ({meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
                 f"seed {meta.get('seed', '?')})")
     for w in meta.get("env_wrapper") or []:

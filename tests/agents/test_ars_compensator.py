@@ -73,7 +73,7 @@ def test_zero_weights_are_the_skyhook_law(env):
         assert np.array_equal(a.data[k], b.data[k]), k
 
 
-@pytest.mark.parametrize("fs", ["h", "hq", "hs"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, fs):
     """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ, the
     same end-stop hits and the same stroke-margin term (from the ``comp_stroke`` observation, which is the true
@@ -169,7 +169,7 @@ def test_stop_guard_acts_exactly_where_its_condition_holds(env):
         AC.ARSCompensatorPolicy({}, table, meta={"stop_guard": 1.5})
 
 
-@pytest.mark.parametrize("fs", ["h", "hq", "hs"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst"])
 def test_policy_is_causal(env, fs):
     """Actions depend only on the observations handed to predict() (and the sea-state estimate): a replay of the
     recorded observations to a fresh policy bound to an env in an unrelated state gives the same actions, and
@@ -433,3 +433,43 @@ def test_gated_feature_set_switches_with_skyhook(env):
         obs, _r, term, trunc, _ = env.step(a_c)
         assert not (term or trunc)
     assert n_on > 20 and n_off > 20                     # both phases were exercised
+
+
+def test_cable_feature_set_reads_tension_and_along_cable_velocity(env):
+    """hst = hs + the top tension's deviation and the along-cable velocity at the lags 0, 0.2, …, 2.0 s. Independently
+    of the feature code: with the cable weights at 0 the policy acts as its hs policy (to round-off), and with one
+    cable weight w on ``top_tension@-0.4s`` (log-damping row) the action differs from the hs policy's by exactly
+    w·(T(t − 0.4 s)/T_static − 1)/scale before the clip, T read here from the recorded observations (the first
+    steps see the first observation, as the other histories do)."""
+    hs_names, names = AC.feature_names("hs"), AC.feature_names("hst")
+    cable = [f"{c}@-{lag / 10:.1f}s" for c in AC.CABLE_CHANNELS for lag in AC.LAG_STEPS]
+    assert names == hs_names + cable and len(names) == 112
+    assert AC.added_features("hst")[0] == "cable" and AC.added_features("hst")[1].sum() == 22
+    assert AC.added_features("hst", "gated")[1].sum() == 45 and not AC.added_features("hs", "cable")[1].any()
+    hs = _policy(scale=0.03, seed=9, fs="hs")
+    zero = {k: np.concatenate([v, np.zeros((AC.N_ACT, 22))], axis=1) for k, v in hs.theta.items()}
+    p0 = AC.ARSCompensatorPolicy(zero, hs.base_table, meta={"feature_set": "hst"})
+    sea, seed = env.unwrapped.eval_sea_states()[5]
+    a_hs = _actions(env, hs.bind_env(env), sea, seed, 150)
+    np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 150), a_hs, rtol=0, atol=1e-6)
+    w, j = 0.02, names.index("top_tension@-0.4s")
+    one = {k: v.copy() for k, v in zero.items()}
+    for v in one.values():
+        v[1, j] = w
+    p1 = AC.ARSCompensatorPolicy(one, hs.base_table, meta={"feature_set": "hst"}).bind_env(env)
+    hs.bind_env(env)
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    seen, n_checked = [], 0
+    for k in range(150):
+        first = np.array([k == 0])
+        a_ref, _ = hs.predict(obs, episode_start=first)
+        a1, _ = p1.predict(obs, episode_start=first)
+        seen.append(float(p1.reader(obs, "top_tension")))
+        lagged = seen[max(k - 4, 0)]
+        want = a_ref[1] + w * (lagged - 1.0) / AC.FEATURE_SCALES["top_tension"]
+        if -0.999 < want < 0.999 and abs(a_ref[1]) < 0.999 and not AC.stop_guard_mask(p1.reader, obs[None], p1.stop_guard)[0]:
+            assert a1[1] == pytest.approx(want, abs=1e-6)
+            n_checked += 1
+        assert a1[0] == pytest.approx(a_ref[0], abs=1e-6)
+        obs, *_ = env.step(a1)
+    assert n_checked > 50

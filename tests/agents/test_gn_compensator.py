@@ -113,6 +113,13 @@ def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
         hs_names[i % len(hs_names)].startswith(arc.GATE_PREFIX) == bool(m) for i, m in enumerate(gated))
     with pytest.raises(ValueError, match="free='gated' needs"):
         gnc.free_mask("hq", "gated")
+    cable = gnc.free_mask("hst", "cable")              # hst: only the top-tension and along-cable histories move
+    hst_names = arc.feature_names("hst")
+    assert cable.sum() == arc.N_ACT * 22 and all(
+        (hst_names[i % len(hst_names)].split("@")[0] in arc.CABLE_CHANNELS) == bool(m) for i, m in enumerate(cable))
+    assert gnc.free_mask("hst", "gated").sum() == arc.N_ACT * 45
+    with pytest.raises(ValueError, match="free='cable' needs"):
+        gnc.free_mask("hs", "cable")
     with pytest.raises(ValueError, match="needs a predictor"):
         gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
