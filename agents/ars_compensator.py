@@ -502,7 +502,7 @@ def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0
     return (sh, sp, hits, mg, acts) if record_actions else (sh, sp, hits, mg)
 
 
-def _setup(episode_seconds: float, n_copies: int, scales: dict, feature_set: str = "h"):
+def _setup(episode_seconds: float, n_copies: int, scales: dict, feature_set: str = "h", parallel: bool = False):
     import gymnasium as gym
     __import__("towenv")                    # registers the ids
     from towenv.envs.vector import CompensatorGainsVectorEnv
@@ -514,7 +514,7 @@ def _setup(episode_seconds: float, n_copies: int, scales: dict, feature_set: str
     ev = env.unwrapped.eval_sea_states()
     env.close()
     venv = CompensatorGainsVectorEnv(num_envs=n_copies, autoreset_mode="NextStep", batch_infos=True,
-                                     episode_seconds=float(episode_seconds))
+                                     episode_seconds=float(episode_seconds), parallel=bool(parallel))
     return table, ev, venv, _Batch(venv, table, scales, feature_set)
 
 
@@ -551,14 +551,16 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
           hit_weight: float = DEFAULT_HIT_WEIGHT, episode_seconds: float = 180.0, fail_penalty: float = 1.0,
           margin_weight: float = DEFAULT_MARGIN_WEIGHT, margin_start: float = DEFAULT_MARGIN_START,
           stop_guard: float = 0.0, hit_weights: dict | None = None, progress: bool = True,
-          log=print) -> ARSCompensatorPolicy:
+          parallel: bool = False, log=print) -> ARSCompensatorPolicy:
     """ARS V1-t (module docstring) on the 12 evaluation (Hs, Tp, heading) entries with training wave seeds; one
     search per sea state of the skyhook table, sharing one batched rollout per iteration. Cost of an episode:
     ln(σ_h/σ_h,sky) + pitch_weight · ln(σ_θ/σ_θ,sky) + hit_weight · hits + margin_weight · mean max(|s| −
     margin_start, 0)² on the same waves (``margin_weight=0, hit_weight=0.05``: the first probe's cost), with the
     stop guard ``stop_guard`` (0 = off) in every rollout and in the returned policy. ``hit_weights`` ({WMO code:
     w}, :func:`entry_hit_weights`) replaces hit_weight in the episodes of the listed codes. Stops after
-    ``max_iterations`` (≤ :data:`MAX_ITERATIONS`) or when the next iteration would pass ``minutes`` of wall time."""
+    ``max_iterations`` (≤ :data:`MAX_ITERATIONS`) or when the next iteration would pass ``minutes`` of wall time.
+    ``parallel``: step the batch's copies on all numba threads (the vector env's ``parallel=True``; every copy is
+    independent, so the result is the same as serial, bit for bit — only the wall time changes)."""
     if not 1 <= int(max_iterations) <= MAX_ITERATIONS:
         raise ValueError(f"max_iterations must be in 1..{MAX_ITERATIONS} (training seeds stay disjoint)")
     t_start = time.perf_counter()
@@ -580,7 +582,7 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
     n_pert = sum(2 * K * len(ent[k]) for k in keys)
     n_ref = len(ev0)
     n_copies = n_pert + 2 * n_ref
-    table, ev, venv, batch = _setup(episode_seconds, n_copies, dict(FEATURE_SCALES))
+    table, ev, venv, batch = _setup(episode_seconds, n_copies, dict(FEATURE_SCALES), parallel=parallel)
     rng = np.random.default_rng(int(seed))
     theta = np.zeros((C, N_ACT, N_FEATURES))
     curve = []
@@ -662,7 +664,7 @@ def train(seed: int = 0, minutes: float = 30.0, max_iterations: int = MAX_ITERAT
     wall = time.perf_counter() - t_start
     meta = {"algo": ALGO, "env_id": ENV_ID, "env_kwargs": {}, "seed": int(seed), "iterations": it,
             "stop_guard": float(stop_guard),
-            "num_timesteps": it * n_copies * steps_per_episode, "wall_seconds": wall,
+            "num_timesteps": it * n_copies * steps_per_episode, "wall_seconds": wall, "parallel": bool(parallel),
             "hyperparameters": {"directions": K, "top": top, "nu": nu, "alpha": alpha, "pitch_weight": pitch_weight,
                                 "hit_weight": hit_weight, "episode_seconds": episode_seconds, "minutes": minutes,
                                 "max_iterations": max_iterations, "fail_penalty": fail_penalty,
@@ -731,6 +733,8 @@ def main(argv=None) -> int:
     ap.add_argument("--episode-seconds", type=float, default=180.0, help="training episode length (s; >= 120)")
     ap.add_argument("--measure-scales", action="store_true", help="print the feature scales (skyhook, training "
                                                                   "seeds of iteration 0) and exit")
+    ap.add_argument("--parallel", action="store_true",
+                    help="step the batch on all cores (numba threads; the same result bit for bit, less wall time)")
     ap.add_argument("--export", default=None, help="policy file (default runs/ars_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
     for name in ("minutes", "nu", "alpha", "episode_seconds"):
@@ -757,7 +761,7 @@ def main(argv=None) -> int:
     out = Path(a.export or f"runs/ars_CompensatorGains-v0_s{a.seed}.npz")
     pol = train(a.seed, a.minutes, a.max_iterations, a.directions, a.top, a.nu, a.alpha, a.pitch_weight,
                 a.hit_weight, a.episode_seconds, margin_weight=a.margin_weight, margin_start=a.margin_start,
-                stop_guard=a.stop_guard, hit_weights=hit_weights)
+                stop_guard=a.stop_guard, hit_weights=hit_weights, parallel=a.parallel)
     save_policy(pol, out)
     print(f"[ars_comp] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
     return 0

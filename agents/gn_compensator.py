@@ -100,7 +100,7 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
           margin_weight: float = arc.DEFAULT_MARGIN_WEIGHT, margin_start: float = arc.DEFAULT_MARGIN_START,
           stop_guard: float | None = None, episode_seconds: float = 180.0, discard: float = 60.0, entries=None,
           init: arc.ARSCompensatorPolicy | None = None, progress: bool = True, feature_set: str | None = None,
-          predictor=None, free: str = "all", log=print) -> arc.ARSCompensatorPolicy:
+          predictor=None, free: str = "all", parallel: bool = False, log=print) -> arc.ARSCompensatorPolicy:
     """Gauss–Newton search (module docstring) from Θ = 0 (skyhook) or from ``init`` (its weights copied by feature
     name; features it does not have start at 0). Stops after ``iterations`` (continuing a Gauss–Newton ``init``'s
     count, so its wave seeds stay fresh) or when the next iteration would pass ``minutes`` of wall time.
@@ -108,7 +108,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     heading) list to train on (default all 12; the other sea states keep ``init``'s weights). ``feature_set``:
     None = the init's ("h" without init); ``predictor``: the causal predictor of a predicted feature set ("hq",
     agents/predictor.py; default ``init``'s). ``free``: "all" weights move, or only the "predicted" (hq) or "gated"
-    (hs) features' (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper)."""
+    (hs) features' (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper).
+    ``parallel``: step the batches on all numba threads (the same result bit for bit, less wall time)."""
     __import__("towenv")
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from .baselines import load_tuned
@@ -137,7 +138,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     ridges = [float(r) for r in ridges]
     n_ep = len(idx) * R
     n_jac, n_ls = n_ep * (NW + 1), n_ep * (len(ridges) + 2)
-    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds))
+    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds),
+              parallel=bool(parallel))
     venv_j = CompensatorGainsVectorEnv(num_envs=n_jac, **kw)
     venv_l = CompensatorGainsVectorEnv(num_envs=n_ls, **kw)
     scales = dict(init.scales) if init is not None else dict(arc.FEATURE_SCALES)
@@ -226,6 +228,7 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     meta = {"algo": arc.ALGO, "method": "gauss-newton", "env_id": arc.ENV_ID, "env_kwargs": {},
             "seed": int(seed), "iterations": it - first, "first_iteration": first, "stop_guard": guard,
             "num_timesteps": (it - first) * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
+            "parallel": bool(parallel),
             "init_num_timesteps": int(init.meta.get("num_timesteps", 0)) if init is not None else 0,
             "hyperparameters": {"iterations": iterations, "minutes": minutes, "replicates": R, "eps": eps,
                                 "ridges": ridges, "pitch_weight": pitch_weight, "hit_weight": hit_weight,
@@ -278,6 +281,8 @@ def main(argv=None) -> int:
                          "along-cable velocity histories)")
     ap.add_argument("--entries", type=int, nargs="+", default=None,
                     help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
+    ap.add_argument("--parallel", action="store_true",
+                    help="step the batches on all cores (numba threads; the same result bit for bit, less wall time)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
@@ -308,7 +313,7 @@ def main(argv=None) -> int:
     try:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight, a.hit_weight,
                     a.margin_weight, stop_guard=a.stop_guard, init=init, entries=a.entries, feature_set=a.features,
-                    predictor=predictor, free=a.free)
+                    predictor=predictor, free=a.free, parallel=a.parallel)
     except ValueError as e:
         ap.error(str(e))
     arc.save_policy(pol, out)
