@@ -473,3 +473,15 @@ def test_cable_feature_set_reads_tension_and_along_cable_velocity(env):
         assert a1[0] == pytest.approx(a_ref[0], abs=1e-6)
         obs, *_ = env.step(a1)
     assert n_checked > 50
+
+
+def test_parallel_training_gives_the_serial_result():
+    """``parallel=True`` (the batch stepped on all numba threads) only changes the wall time: every copy is an
+    independent simulation, so two ARS iterations give the same weights bit for bit, and the file records it."""
+    kw = dict(seed=7, minutes=30.0, max_iterations=2, directions=1, top=1, episode_seconds=120.0, progress=False)
+    serial, par = AC.train(**kw), AC.train(parallel=True, **kw)
+    assert par.meta["parallel"] is True and serial.meta["parallel"] is False
+    assert sorted(par.theta) == sorted(serial.theta)
+    assert all(np.array_equal(par.theta[k], serial.theta[k]) for k in serial.theta)
+    assert any(np.any(v) for v in par.theta.values())
+    assert par.meta["curve"] == [c | {"seconds": p["seconds"]} for c, p in zip(serial.meta["curve"], par.meta["curve"])]
