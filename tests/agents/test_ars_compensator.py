@@ -485,3 +485,18 @@ def test_parallel_training_gives_the_serial_result():
     assert all(np.array_equal(par.theta[k], serial.theta[k]) for k in serial.theta)
     assert any(np.any(v) for v in par.theta.values())
     assert par.meta["curve"] == [c | {"seconds": p["seconds"]} for c, p in zip(serial.meta["curve"], par.meta["curve"])]
+
+
+def test_cable_state_probe_scores_a_known_linear_response():
+    """scripts/probe_cable_state.py's leave-one-episode-out R²: a response that is a fixed FIR filter of the channel
+    scores ≈ 1, a response independent of it ≈ 0 (≤ 0.05: the fold's out-of-sample fit cannot explain noise)."""
+    script = load_script("probe_cable_state")
+    rng = np.random.default_rng(0)
+    eps, noise = [], []
+    for _ in range(4):
+        x = rng.standard_normal(1500)
+        y = np.convolve(x, [0.5, 0.3, -0.2, 0.1])[:1500]
+        eps.append({"u": x, "fish_heave_dev": y})
+        noise.append({"u": x, "fish_heave_dev": rng.standard_normal(1500)})
+    assert script.loo_r2(eps, ("u",), lags=20, start=100) > 0.999
+    assert script.loo_r2(noise, ("u",), lags=20, start=100) < 0.05
