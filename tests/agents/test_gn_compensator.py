@@ -467,3 +467,32 @@ def test_parallel_search_gives_the_serial_result(trained):
     assert par.meta["parallel"] is True and trained.meta["parallel"] is False
     assert all(np.array_equal(par.theta[k], trained.theta[k]) for k in trained.theta)
     assert [p["picks"] for p in par.meta["curve"]] == [p["picks"] for p in trained.meta["curve"]]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_rerun_chain_files_carry_the_gns_recipe(seed):
+    """The `gns` chain re-run with --parallel (``arsp`` → ``gnp`` → ``gnsp``, docs/agents.md "The same chain within the
+    hour") is package data under its renamed family names: the recipe of ARS seed 0 (55 iterations, stop guard 0.9),
+    Gauss–Newton (6 iterations from it) and the gated continuation (4 from 6 on) recorded, each run parallel, the
+    ``--init`` chain resolvable by scripts/training_cost.py, the gated step on top of the ``gnp`` weights, and
+    different weights from the committed ``gns`` chain (another ARS start)."""
+    import agents
+    base = Path(agents.__file__).parent / "trained"
+    ars = arc.load_policy(base / "arsp_CompensatorGains-v0_s0.npz")
+    gn = arc.load_policy(base / f"gnp_CompensatorGains-v0_s{seed}.npz")
+    gns = arc.load_policy(base / f"gnsp_CompensatorGains-v0_s{seed}.npz")
+    assert ars.meta["iterations"] == 55 and ars.stop_guard == 0.9 and ars.meta["parallel"] is True
+    assert gn.meta["iterations"] == 6 and gn.meta["hyperparameters"]["init"] == "arsp_CompensatorGains-v0_s0"
+    assert (gns.meta["first_iteration"], gns.meta["iterations"], gns.feature_set) == (6, 4, "hs")
+    assert gns.meta["hyperparameters"]["init"] == f"gnp_CompensatorGains-v0_s{seed}"
+    assert gn.meta["parallel"] is True and gns.meta["parallel"] is True and gns.meta["seed"] == seed
+    assert gns.meta["renamed_from"] == f"gns_CompensatorGains-v0_s{seed}"
+    nh = arc.n_features("h")
+    assert all(np.array_equal(gns.theta[k][:, :nh], gn.theta[k]) for k in gn.theta)
+    committed = arc.load_policy(base / "ars_CompensatorGains-v0_s0.npz")
+    assert not all(np.array_equal(ars.theta[k], committed.theta[k]) for k in ars.theta)
+    cost = load_script("training_cost")
+    runs = cost.chain(base / f"gnsp_CompensatorGains-v0_s{seed}.npz")
+    assert [r[0] for r in runs] == ["arsp_CompensatorGains-v0_s0", f"gnp_CompensatorGains-v0_s{seed}",
+                                    f"gnsp_CompensatorGains-v0_s{seed}"]
+    assert sum(r[2] for r in runs) == 63_720_000
