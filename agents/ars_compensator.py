@@ -135,7 +135,8 @@ GATE_PREFIX = "on*"
 #: (``tow_vel_along``, m/s) at the lags :data:`LAG_STEPS`, ungated, after the gated copy (112 features). Under
 #: skyhook the fish heave is poorly explained by the tow point's vertical-motion history alone (leave-one-episode-out
 #: R² of a linear fit on 10 s of it: 0.43 / 0.24 / 0.16 in codes 3 / 4 / 5) and much better with the top tension's
-#: (0.61 / 0.51 / 0.46): the tension carries the cable's dynamic state, which "h" does not see (docs/agents.md)
+#: (0.61 / 0.51 / 0.46; ``python scripts/probe_cable_state.py``): the tension carries the cable's dynamic state, which
+#: "h" does not see. Searched from ``gns`` it gained no heave on the evaluation set (docs/agents.md, ``gnst``)
 CABLE = frozenset({"hst"})
 CABLE_CHANNELS = ("top_tension", "tow_vel_along")
 #: the value subtracted from a cable channel before scaling (the static top tension is 1 in its channel's units)
