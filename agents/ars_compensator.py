@@ -705,6 +705,52 @@ def load_policy(path: str | Path) -> ARSCompensatorPolicy:
     return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 
+#: metadata fields a weight average keeps of each member (its training chain, for scripts/training_cost.py)
+MEMBER_FIELDS = ("algo", "method", "seed", "iterations", "first_iteration", "feature_set")
+
+
+def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
+    """The policy whose weights are the mean of ``policies``' weights, sea state by sea state (the residual is linear
+    in its weights, so it is also the mean of their log-gain residuals before the action clip). The members must be
+    one class acting alike: the same feature set, feature scales, skyhook gain table, stop guard, environment
+    keywords and sea-state keys, and no stored predictor (ValueError naming the differing field and members
+    otherwise). ``seed`` labels the average (its members carry their own training seeds); ``meta["averaged_from"]``
+    lists the members' names and ``meta["members"]`` their training records (``init`` included), which
+    scripts/training_cost.py follows."""
+    if len(policies) < 2:
+        raise ValueError(f"average_policies: needs at least 2 policies (got {len(policies)})")
+    first = policies[0]
+    names = [p.name for p in policies]
+    if len(set(names)) != len(names):
+        raise ValueError(f"average_policies: a member appears twice ({', '.join(names)})")
+
+    def same(field, value):
+        for p in policies[1:]:
+            a, b = value(first), value(p)
+            equal = (a.keys() == b.keys() and all(np.array_equal(np.asarray(a[k]), np.asarray(b[k])) for k in a)
+                     if isinstance(a, dict) and isinstance(b, dict) else a == b)
+            if not equal:
+                raise ValueError(f"average_policies: {field} differs between {first.name} ({a!r}) and {p.name} "
+                                 f"({b!r}); a weight average needs members of one class acting alike")
+    same("feature_set", lambda p: p.feature_set)
+    same("feature scales", lambda p: p.scales)
+    same("skyhook gain table (base_table)", lambda p: p.base_table)
+    same("stop_guard", lambda p: p.stop_guard)
+    same("env_kwargs", lambda p: p.meta.get("env_kwargs") or {})
+    same("sea-state keys of theta", lambda p: sorted(p.theta))
+    if any(p.predictor is not None for p in policies):
+        raise ValueError(f"average_policies: feature set {first.feature_set!r} stores a predictor; averaging "
+                         f"policies with predictors is not supported")
+    theta = {k: np.mean([p.theta[k] for p in policies], axis=0) for k in first.theta}
+    members = [{"name": p.name, **{f: p.meta.get(f) for f in MEMBER_FIELDS},
+                "init": (p.meta.get("hyperparameters") or {}).get("init")} for p in policies]
+    meta = {"algo": ALGO, "method": "weight-average", "env_id": ENV_ID,
+            "env_kwargs": dict(first.meta.get("env_kwargs") or {}), "seed": int(seed),
+            "stop_guard": first.stop_guard, "feature_set": first.feature_set, "averaged_from": names,
+            "members": members, "num_timesteps": 0, "curve": []}
+    return ARSCompensatorPolicy(theta, first.base_table, first.scales, meta, name=f"average_s{seed}")
+
+
 def main(argv=None) -> int:
     """``python scripts/train_ars_compensator.py --seed 0 --minutes 30 --export runs/ars_CompensatorGains-v0_s0.npz``"""
     import argparse

@@ -225,6 +225,14 @@ def trained_description(meta: dict) -> str:
         desc += (f", linear residual on `along_cable` over the MRU along-cable history{more} (feature set {fs}, "
                  f"{meta.get('iterations', '?')} {'Gauss-Newton' if gn else 'ARS'} iterations{start}, training "
                  f"seed {meta.get('seed', '?')})")
+    elif meta.get("algo") == "ars_skyhook" and meta.get("method") == "weight-average":
+        members = meta.get("members") or []
+        runs = "; ".join(f"{m.get('name', '?')}: {m.get('iterations', '?')} "
+                         f"{'Gauss-Newton' if m.get('method') == 'gauss-newton' else 'ARS'} iterations"
+                         + (f" after {m['init']}" if m.get("init") else "") + f", training seed {m.get('seed', '?')}"
+                         for m in members)
+        desc = (f"Mean of the weights of {len(members)} policies of the ARS compensator class (linear residual on "
+                f"`skyhook`, feature set {meta.get('feature_set', '?')}; scripts/average_compensator.py; {runs})")
     elif meta.get("algo") == "ars_skyhook" and meta.get("trainer") == "probe_semiactive_imitation":
         desc = ("imitation of clairvoyant semi-active teacher plans (the ARS compensator policy class, ridge "
                 f"{meta.get('ridge', '?')}, {len(meta.get('plans') or [])} plans; "

@@ -1,7 +1,7 @@
 """Training cost of committed ARS / Gauss–Newton policy files, following each file's ``--init`` chain (issue 14's
 "≤ 1 h wall per seed" recipe goal). For every file: its own wall time (the sum of ``meta["curve"][*]["seconds"]``,
 the time of its iterations) and env steps, and the totals of the whole chain it continues (the ``init`` named in its
-hyperparameters, looked up next to it):
+hyperparameters, looked up next to it; for a weight average, every member's chain with their shared start once):
 
     python scripts/training_cost.py agents/trained/gnq2_WinchPayout-v0_s{0,1,2}.npz agents/trained/gn_CompensatorGains-v0_s{0,1,2}.npz
 
@@ -33,8 +33,23 @@ def own_cost(meta) -> tuple[float, int]:
 
 
 def chain(path) -> list[tuple[str, float, int]]:
-    """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path``."""
-    out, seen, path = [], set(), Path(path)
+    """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path``. A weight average
+    (``meta["averaged_from"]``, scripts/average_compensator.py) costs its members' chains, looked up next to it, a run
+    they share (their common start) counted once, then itself (no iterations of its own)."""
+    path = Path(path)
+    members = read_meta(path).get("averaged_from")
+    if members:
+        out, seen = [], set()
+        for m in members:
+            nxt = path.parent / f"{Path(m).stem}.npz"
+            if not nxt.exists():
+                raise ValueError(f"{path}: its member {m!r} is not next to it ({nxt})")
+            for run in chain(nxt):
+                if run[0] not in seen:
+                    seen.add(run[0])
+                    out.append(run)
+        return out + [(path.stem, *own_cost(read_meta(path)))]
+    out, seen = [], set()
     while True:
         if path.stem in seen:
             raise ValueError(f"{path}: its --init chain loops back to {path.stem}")

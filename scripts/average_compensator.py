@@ -1,0 +1,43 @@
+"""The mean of the weights of CompensatorGains policies of one class (agents.ars_compensator.average_policies), e.g.
+two Gauss-Newton chains from one ARS start with disjoint training seeds (docs/agents.md "Averaging two chains"):
+
+    python scripts/average_compensator.py --seed 0 --export runs/chain/gnsm_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s1.npz
+
+The members' files must lie next to each other (and their --init chains next to them) for scripts/training_cost.py
+to add up the average's training cost.
+"""
+import argparse
+import sys
+from pathlib import Path
+
+from agents import ars_compensator as arc
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("policies", nargs="+", help="CompensatorGains ARS / Gauss-Newton policy files (.npz), at least 2")
+    ap.add_argument("--seed", type=int, required=True, help="the label of the average (its members keep their own)")
+    ap.add_argument("--export", required=True, help="output .npz (written atomically)")
+    a = ap.parse_args(argv)
+    if len(a.policies) < 2:
+        ap.error(f"policies: give at least 2 files to average (got {len(a.policies)})")
+    if not a.export.endswith(".npz"):
+        ap.error(f"--export must name an .npz file (got {a.export!r})")
+    members = []
+    for p in a.policies:
+        try:
+            members.append(arc.load_policy(p))
+        except (OSError, ValueError) as exc:
+            ap.error(f"{p}: {exc}")
+    try:
+        avg = arc.average_policies(members, a.seed)
+    except ValueError as exc:
+        ap.error(str(exc))
+    Path(a.export).parent.mkdir(parents=True, exist_ok=True)
+    out = arc.save_policy(avg, a.export)
+    print(f"[average] wrote {out}: mean of {', '.join(m.name for m in members)}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

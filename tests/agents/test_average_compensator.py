@@ -1,0 +1,92 @@
+"""Weight averages of CompensatorGains policies (issue 14, agents.ars_compensator.average_policies,
+scripts/average_compensator.py): the average's weights are its members' mean, so its log-gain residual is the mean
+of theirs before the action clip; members of different classes are refused with the field named; the file keeps
+what it averages, the report names it, and scripts/training_cost.py adds up its members' chains with their shared
+start counted once."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from agents import ars_compensator as arc
+from agents.evaluation import trained_description
+from helpers import load_script
+
+TRAINED = Path(arc.__file__).parent / "trained"
+
+
+def _load(stem):
+    return arc.load_policy(TRAINED / f"{stem}.npz")
+
+
+def _members():
+    return [_load("gnsp_CompensatorGains-v0_s0"), _load("gnsp_CompensatorGains-v0_s1")]
+
+
+def test_average_is_the_mean_of_the_weights_and_of_the_residuals():
+    a, b = _members()
+    avg = arc.average_policies([a, b], seed=7)
+    rng = np.random.default_rng(0)
+    nf = arc.n_features("hs")
+    for k in a.theta:
+        np.testing.assert_array_equal(avg.theta[k], (a.theta[k] + b.theta[k]) / 2.0)
+        phi = rng.normal(size=(5, nf))
+        r = [arc._residual(np.repeat(p.theta[k][None], len(phi), axis=0), phi) for p in (a, b, avg)]
+        np.testing.assert_allclose(r[2], (r[0] + r[1]) / 2.0, rtol=0, atol=1e-12)
+    assert avg.feature_set == "hs" and avg.stop_guard == a.stop_guard and avg.base_table.keys() == a.base_table.keys()
+    assert avg.meta["method"] == "weight-average" and avg.meta["seed"] == 7
+    assert avg.meta["averaged_from"] == [a.name, b.name]
+    assert [m["init"] for m in avg.meta["members"]] == ["gnp_CompensatorGains-v0_s0", "gnp_CompensatorGains-v0_s1"]
+    # averaging the same weights changes nothing; the members are not touched
+    copy = arc.ARSCompensatorPolicy(a.theta, a.base_table, a.scales, dict(a.meta), name="copy")
+    same = arc.average_policies([a, copy], seed=0)
+    assert all(np.array_equal(same.theta[k], a.theta[k]) for k in a.theta)
+    assert not all(np.array_equal(a.theta[k], b.theta[k]) for k in a.theta)
+
+
+def test_members_of_different_classes_are_refused_with_the_field_named():
+    a, b = _members()
+    with pytest.raises(ValueError, match="feature_set differs"):
+        arc.average_policies([a, _load("gnp_CompensatorGains-v0_s1")], seed=0)
+    guarded = arc.ARSCompensatorPolicy(b.theta, b.base_table, b.scales, dict(b.meta) | {"stop_guard": 0.5}, name="g")
+    with pytest.raises(ValueError, match="stop_guard differs"):
+        arc.average_policies([a, guarded], seed=0)
+    other_keys = arc.ARSCompensatorPolicy({k: v for k, v in list(b.theta.items())[:-1]}, b.base_table, b.scales,
+                                          dict(b.meta), name="k")
+    with pytest.raises(ValueError, match="sea-state keys"):
+        arc.average_policies([a, other_keys], seed=0)
+    with pytest.raises(ValueError, match="at least 2"):
+        arc.average_policies([a], seed=0)
+    with pytest.raises(ValueError, match="appears twice"):
+        arc.average_policies([a, a], seed=0)
+
+
+def test_cli_writes_a_file_that_reports_and_costs_name_its_members(tmp_path, capsys):
+    for stem in ("arsp_CompensatorGains-v0_s0", "gnp_CompensatorGains-v0_s0", "gnp_CompensatorGains-v0_s1",
+                 "gnsp_CompensatorGains-v0_s0", "gnsp_CompensatorGains-v0_s1"):
+        shutil.copy(TRAINED / f"{stem}.npz", tmp_path)
+    out = tmp_path / "gnsm_CompensatorGains-v0_s0.npz"
+    script = load_script("average_compensator")
+    assert script.main(["--seed", "0", "--export", str(out), str(tmp_path / "gnsp_CompensatorGains-v0_s0.npz"),
+                        str(tmp_path / "gnsp_CompensatorGains-v0_s1.npz")]) == 0
+    avg = arc.load_policy(out)
+    assert avg.meta["averaged_from"] == ["gnsp_CompensatorGains-v0_s0", "gnsp_CompensatorGains-v0_s1"]
+    desc = trained_description(avg.meta)
+    assert desc.startswith("Mean of the weights of 2 policies") and "gnsp_CompensatorGains-v0_s1" in desc
+    cost = load_script("training_cost")
+    runs = cost.chain(out)
+    assert [r[0] for r in runs] == ["arsp_CompensatorGains-v0_s0", "gnp_CompensatorGains-v0_s0",
+                                    "gnsp_CompensatorGains-v0_s0", "gnp_CompensatorGains-v0_s1",
+                                    "gnsp_CompensatorGains-v0_s1", "gnsm_CompensatorGains-v0_s0"]
+    singles = [cost.chain(tmp_path / f"gnsp_CompensatorGains-v0_s{s}.npz") for s in (0, 1)]
+    ars_steps = singles[0][0][2]
+    assert sum(r[2] for r in runs) == sum(r[2] for c in singles for r in c) - ars_steps   # the start once
+    (tmp_path / "gnp_CompensatorGains-v0_s1.npz").unlink()
+    with pytest.raises(ValueError, match="not next to it"):
+        cost.chain(out)
+    with pytest.raises(SystemExit):
+        script.main(["--seed", "0", "--export", str(tmp_path / "x.npz"), str(out)])
+    assert "at least 2" in capsys.readouterr().err
