@@ -90,3 +90,23 @@ def test_cli_writes_a_file_that_reports_and_costs_name_its_members(tmp_path, cap
     with pytest.raises(SystemExit):
         script.main(["--seed", "0", "--export", str(tmp_path / "x.npz"), str(out)])
     assert "at least 2" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_committed_gnsm_is_the_mean_of_two_gnsp_chains_from_one_ars_start(k):
+    """`gnsm` seed k (docs/agents.md "Averaging two chains within the hour") is the mean of the committed `gnsp`
+    seeds 2k and 2k + 1, both the `gns` recipe (Gauss–Newton 6, then 4 gated) from `arsp` seed 0 with disjoint
+    Gauss–Newton seeds; its cost chain holds the ARS start once and both chains."""
+    avg = _load(f"gnsm_CompensatorGains-v0_s{k}")
+    members = [_load(f"gnsp_CompensatorGains-v0_s{s}") for s in (2 * k, 2 * k + 1)]
+    assert avg.meta["averaged_from"] == [m.name for m in members] and avg.meta["seed"] == k
+    for k_sea in avg.theta:
+        np.testing.assert_array_equal(avg.theta[k_sea], (members[0].theta[k_sea] + members[1].theta[k_sea]) / 2.0)
+    for m in members:
+        gn = _load(m.meta["hyperparameters"]["init"])
+        assert (m.meta["first_iteration"], m.meta["iterations"], m.feature_set) == (6, 4, "hs")
+        assert gn.meta["iterations"] == 6 and gn.meta["hyperparameters"]["init"] == "arsp_CompensatorGains-v0_s0"
+        assert m.meta["parallel"] is True and gn.meta["parallel"] is True
+    assert members[0].meta["seed"] != members[1].meta["seed"]
+    runs = load_script("training_cost").chain(TRAINED / f"gnsm_CompensatorGains-v0_s{k}.npz")
+    assert [r[0] for r in runs][0] == "arsp_CompensatorGains-v0_s0" and len(runs) == 6
