@@ -167,7 +167,8 @@ def _cost(sh, sp, sh_ref, sp_ref, pitch_weight, fail_penalty=1.0):
 def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates: int = 1, eps: float = 0.005,
           ridges=(0.01, 0.1, 1.0), pitch_weight: float = 0.5, episode_seconds: float = 180.0,
           discard: float = 60.0, feature_set: str = ars.DEFAULT_FEATURE_SET, entries=None, progress: bool = True,
-          log=print, init: ars.ARSPolicy | None = None, predictor=None, wave_seed=None) -> ars.ARSPolicy:
+          log=print, init: ars.ARSPolicy | None = None, predictor=None, wave_seed=None,
+          parallel: bool = False) -> ars.ARSPolicy:
     """Gauss–Newton search (module docstring) from θ = 0 (the along-cable law), or from the policy ``init`` (an
     :class:`agents.ars.ARSPolicy` of any feature set: its weights are copied by feature name, features it does not
     have start at 0; its along-cable table is kept; the iterations continue its count, so the wave seeds are fresh).
@@ -177,7 +178,9 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     ``predictor``: the causal predictor of a :data:`agents.ars.PREDICTED` feature set (agents/predictor.py; default
     ``init``'s). ``wave_seed``:
     ``f(base seed + 10·replicate, iteration, seed, line_search) -> wave seed`` of every episode (default
-    :func:`train_seed`; ``scripts/probe_class_bound.py`` passes the evaluation set's own seeds)."""
+    :func:`train_seed`; ``scripts/probe_class_bound.py`` passes the evaluation set's own seeds). ``parallel``: step
+    the batches' copies on all numba threads (the vector env's ``parallel=True``; every copy is independent, so the
+    result is the serial one bit for bit, in less wall time on several cores)."""
     import towenv  # noqa: F401  (registers the ids)
     from towenv.envs.vector import WinchPayoutVectorEnv
     from .baselines import load_tuned
@@ -211,7 +214,8 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     ridges = [float(r) for r in ridges]
     n_ep = len(pairs)
     n_jac, n_ls = n_ep * (NF + 1), n_ep * (len(ridges) + 2)
-    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds))
+    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds),
+              parallel=bool(parallel))
     venv_j = WinchPayoutVectorEnv(num_envs=n_jac, **kw)
     venv_l = WinchPayoutVectorEnv(num_envs=n_ls, **kw)
     scales = dict(ars.FEATURE_SCALES)
@@ -286,6 +290,7 @@ def train(seed: int = 0, iterations: int = 10, minutes: float = 55.0, replicates
     meta = {"algo": "ars", "method": "gauss-newton", "env_id": ars.ENV_ID, "env_kwargs": {},
             "feature_set": feature_set, "seed": int(seed), "iterations": it - first, "first_iteration": first,
             "num_timesteps": (it - first) * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
+            "parallel": bool(parallel),
             "hyperparameters": {"iterations": iterations, "minutes": minutes,
                                 "replicates": reps_by_code[0] if len(set(reps_by_code)) == 1 else reps_by_code,
                                 "eps": eps,
@@ -339,6 +344,9 @@ def main(argv=None) -> int:
                                                      "default: the --init policy's)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz, "
                                                   "gn_v3_... for feature set v3)")
+    ap.add_argument("--parallel", action="store_true",
+                    help="step each batch on all numba threads (NUMBA_NUM_THREADS): the same result bit for bit, "
+                         "less wall time when one run has the cores to itself")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
@@ -366,7 +374,8 @@ def main(argv=None) -> int:
     try:
         reps = a.replicates[0] if len(a.replicates) == 1 else a.replicates
         pol = train(a.seed, a.iterations, a.minutes, reps, a.eps, a.ridges, a.pitch_weight,
-                    feature_set=a.features, entries=a.entries, init=init, predictor=predictor)
+                    feature_set=a.features, entries=a.entries, init=init, predictor=predictor,
+                    parallel=a.parallel)
     except ValueError as e:
         ap.error(str(e))
     ars.save_policy(pol, out)
