@@ -705,7 +705,7 @@ def load_policy(path: str | Path) -> ARSCompensatorPolicy:
     return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 
-#: metadata fields a weight average keeps of each member (its training chain, for scripts/training_cost.py)
+#: metadata fields a weight average keeps of each member (with its ``init``: what the report says of each member)
 MEMBER_FIELDS = ("algo", "method", "seed", "iterations", "first_iteration", "feature_set")
 
 
@@ -715,8 +715,8 @@ def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
     one class acting alike: the same feature set, feature scales, skyhook gain table, stop guard, environment
     keywords and sea-state keys, and no stored predictor (ValueError naming the differing field and members
     otherwise). ``seed`` labels the average (its members carry their own training seeds); ``meta["averaged_from"]``
-    lists the members' names and ``meta["members"]`` their training records (``init`` included), which
-    scripts/training_cost.py follows."""
+    lists the members' names (scripts/training_cost.py follows them to the members' files and their ``--init``
+    chains) and ``meta["members"]`` their training records (``init`` included; the report's description)."""
     if len(policies) < 2:
         raise ValueError(f"average_policies: needs at least 2 policies (got {len(policies)})")
     first = policies[0]

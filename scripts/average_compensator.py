@@ -23,6 +23,9 @@ def main(argv=None) -> int:
         ap.error(f"policies: give at least 2 files to average (got {len(a.policies)})")
     if not a.export.endswith(".npz"):
         ap.error(f"--export must name an .npz file (got {a.export!r})")
+    if any(Path(a.export).stem == Path(p).stem for p in a.policies):
+        ap.error(f"--export {a.export!r} has the name of a member: the average would overwrite it (or, next to it, "
+                 "stand for it in scripts/training_cost.py); give it its own name")
     members = []
     for p in a.policies:
         try:

@@ -32,19 +32,21 @@ def own_cost(meta) -> tuple[float, int]:
     return seconds, int(meta.get("num_timesteps", 0))
 
 
-def chain(path) -> list[tuple[str, float, int]]:
+def chain(path, _inside=frozenset()) -> list[tuple[str, float, int]]:
     """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path``. A weight average
     (``meta["averaged_from"]``, scripts/average_compensator.py) costs its members' chains, looked up next to it, a run
     they share (their common start) counted once, then itself (no iterations of its own)."""
     path = Path(path)
     members = read_meta(path).get("averaged_from")
     if members:
+        if path.stem in _inside or path.stem in {Path(m).stem for m in members}:
+            raise ValueError(f"{path}: the weight average lists itself among its members (directly or through one)")
         out, seen = [], set()
         for m in members:
             nxt = path.parent / f"{Path(m).stem}.npz"
             if not nxt.exists():
                 raise ValueError(f"{path}: its member {m!r} is not next to it ({nxt})")
-            for run in chain(nxt):
+            for run in chain(nxt, _inside | {path.stem}):
                 if run[0] not in seen:
                     seen.add(run[0])
                     out.append(run)

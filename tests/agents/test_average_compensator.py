@@ -110,3 +110,22 @@ def test_committed_gnsm_is_the_mean_of_two_gnsp_chains_from_one_ars_start(k):
     assert members[0].meta["seed"] != members[1].meta["seed"]
     runs = load_script("training_cost").chain(TRAINED / f"gnsm_CompensatorGains-v0_s{k}.npz")
     assert [r[0] for r in runs][0] == "arsp_CompensatorGains-v0_s0" and len(runs) == 6
+
+
+def test_an_average_cannot_take_a_members_name_or_list_itself(tmp_path, capsys):
+    """The CLI refuses an --export with a member's name (it would overwrite the member); training_cost refuses an
+    average that lists itself (a file renamed over a member) instead of recursing without end."""
+    for stem in ("gnsp_CompensatorGains-v0_s0", "gnsp_CompensatorGains-v0_s1"):
+        shutil.copy(TRAINED / f"{stem}.npz", tmp_path)
+    member = tmp_path / "gnsp_CompensatorGains-v0_s0.npz"
+    before = member.read_bytes()
+    script = load_script("average_compensator")
+    with pytest.raises(SystemExit):
+        script.main(["--seed", "0", "--export", str(member), str(member),
+                     str(tmp_path / "gnsp_CompensatorGains-v0_s1.npz")])
+    assert "has the name of a member" in capsys.readouterr().err and member.read_bytes() == before
+    avg = arc.average_policies(_members(), seed=0)
+    avg.meta["averaged_from"] = ["loop_s0", "gnsp_CompensatorGains-v0_s1"]
+    arc.save_policy(avg, tmp_path / "loop_s0.npz")
+    with pytest.raises(ValueError, match="lists itself"):
+        load_script("training_cost").chain(tmp_path / "loop_s0.npz")
