@@ -46,7 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import ObsReader, nearest_key
+from .common import ObsReader, add_parallel_flag, nearest_key
 from .predictor import PRED_CHANNELS, check_channels, from_policy_file, push
 
 __all__ = ["ARSPolicy", "train", "save_policy", "load_ars_policy", "features_single", "HISTORY_CHANNELS",
@@ -579,9 +579,7 @@ def main(argv=None) -> int:
                          "before 2026-12-03)")
     ap.add_argument("--export", default=None, help="policy file (default runs/ars2_WinchPayout-v0_s<seed>.npz for "
                                                   "feature set v2, runs/ars_WinchPayout-v0_s<seed>.npz for v1)")
-    ap.add_argument("--parallel", action="store_true",
-                    help="step the batch on all numba threads (NUMBA_NUM_THREADS): the same result bit for bit, "
-                         "less wall time when one run has the cores to itself")
+    add_parallel_flag(ap)
     a = ap.parse_args(argv)
     for name in ("minutes", "nu", "alpha", "episode_seconds"):
         v = getattr(a, name)

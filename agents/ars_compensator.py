@@ -72,7 +72,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import COMPENSATOR_ID, ObsReader, nearest_key, read_ars_file, reset_copies, save_ars_file
+from .common import (COMPENSATOR_ID, ObsReader, add_parallel_flag, nearest_key, read_ars_file, reset_copies,
+                     save_ars_file)
 from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, push
 from .predictor import feature_names as predicted_names
 
@@ -780,8 +781,7 @@ def main(argv=None) -> int:
     ap.add_argument("--episode-seconds", type=float, default=180.0, help="training episode length (s; >= 120)")
     ap.add_argument("--measure-scales", action="store_true", help="print the feature scales (skyhook, training "
                                                                   "seeds of iteration 0) and exit")
-    ap.add_argument("--parallel", action="store_true",
-                    help="step the batch on all cores (numba threads; the same result bit for bit, less wall time)")
+    add_parallel_flag(ap)
     ap.add_argument("--export", default=None, help="policy file (default runs/ars_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
     for name in ("minutes", "nu", "alpha", "episode_seconds"):

@@ -181,3 +181,11 @@ def read_ars_file(path, feature_names: list, expect: dict | None = None, what: s
                              f"against {len(feature_names)})")
         theta = {str(k): np.array(v) for k, v in zip(z["keys"], z["theta"])}
         return theta, json.loads(str(z["base_table"])), json.loads(str(z["scales"])), meta
+
+
+def add_parallel_flag(ap) -> None:
+    """``--parallel`` of the ARS / Gauss–Newton trainers (one definition for the four): step the training batches on
+    all numba threads; every copy is independent, so the result is the serial one bit for bit (tested per trainer)."""
+    ap.add_argument("--parallel", action="store_true",
+                    help="step the training batches on all numba threads (NUMBA_NUM_THREADS): the same result bit for "
+                         "bit, less wall time when one run has the cores to itself")

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from . import ars
-from .common import nearest_key
+from .common import add_parallel_flag, nearest_key
 
 __all__ = ["train", "train_seed", "initial_theta", "gauss_newton_steps", "replicates_per_sea_state", "MAX_ITERATIONS",
            "SEED_OFFSET", "SECOND_BLOCK_OFFSET", "ITERATIONS_PER_BLOCK", "main"]
@@ -344,9 +344,7 @@ def main(argv=None) -> int:
                                                      "default: the --init policy's)")
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_WinchPayout-v0_s<seed>.npz, "
                                                   "gn_v3_... for feature set v3)")
-    ap.add_argument("--parallel", action="store_true",
-                    help="step each batch on all numba threads (NUMBA_NUM_THREADS): the same result bit for bit, "
-                         "less wall time when one run has the cores to itself")
+    add_parallel_flag(ap)
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")

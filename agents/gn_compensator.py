@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from . import ars_compensator as arc
-from .common import nearest_key
+from .common import add_parallel_flag, nearest_key
 from .gn import check_settings, first_iteration, gauss_newton_steps, training_entries
 
 __all__ = ["train", "train_seed", "MAX_ITERATIONS", "SEED_OFFSET", "main"]
@@ -281,8 +281,7 @@ def main(argv=None) -> int:
                          "along-cable velocity histories)")
     ap.add_argument("--entries", type=int, nargs="+", default=None,
                     help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
-    ap.add_argument("--parallel", action="store_true",
-                    help="step the batches on all cores (numba threads; the same result bit for bit, less wall time)")
+    add_parallel_flag(ap)
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:

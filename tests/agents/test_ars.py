@@ -303,7 +303,6 @@ def test_training_smoke_on_the_batched_env():
     assert not used & reserved
 
 
-
 def test_parallel_training_gives_the_serial_result():
     """``parallel=True`` (``--parallel``) only changes the wall time: one ARS iteration with the batch stepped on all
     numba threads gives the serial run's weights and training curve bit for bit."""
@@ -315,6 +314,7 @@ def test_parallel_training_gives_the_serial_result():
     drop = ("seconds",)
     assert ([{k: v for k, v in c.items() if k not in drop} for c in par.meta["curve"]]
             == [{k: v for k, v in c.items() if k not in drop} for c in ser.meta["curve"]])
+
 
 def test_evaluate_takes_an_ars_policy_file(tmp_path, monkeypatch, capsys):
     evaluate = load_script("evaluate")
