@@ -65,6 +65,7 @@ evaluation (+0…400), tuning (+500), validation (+700), Hover design (+900), fi
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import time
@@ -714,8 +715,8 @@ def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
     """The policy whose weights are the mean of ``policies``' weights, sea state by sea state (the residual is linear
     in its weights, so it is also the mean of their log-gain residuals before the action clip). The members must be
     one class acting alike: the same feature set, feature scales, skyhook gain table, stop guard, environment
-    keywords and sea-state keys, and no stored predictor (ValueError naming the differing field and members
-    otherwise). ``seed`` labels the average (its members carry their own training seeds); ``meta["averaged_from"]``
+    keywords and sea-state keys, and the same stored predictor or none (ValueError naming the differing field and
+    members otherwise; the average keeps the members' predictor). ``seed`` labels the average (its members carry their own training seeds); ``meta["averaged_from"]``
     lists the members' names (scripts/training_cost.py follows them to the members' files and their ``--init``
     chains) and ``meta["members"]`` their training records (``init`` included; the report's description)."""
     if len(policies) < 2:
@@ -726,8 +727,9 @@ def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
         raise ValueError(f"average_policies: a member appears twice ({', '.join(names)})")
 
     def same(field, value):
+        a = value(first)
         for p in policies[1:]:
-            a, b = value(first), value(p)
+            b = value(p)
             equal = (a.keys() == b.keys() and all(np.array_equal(np.asarray(a[k]), np.asarray(b[k])) for k in a)
                      if isinstance(a, dict) and isinstance(b, dict) else a == b)
             if not equal:
@@ -739,9 +741,7 @@ def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
     same("stop_guard", lambda p: p.stop_guard)
     same("env_kwargs", lambda p: p.meta.get("env_kwargs") or {})
     same("sea-state keys of theta", lambda p: sorted(p.theta))
-    if any(p.predictor is not None for p in policies):
-        raise ValueError(f"average_policies: feature set {first.feature_set!r} stores a predictor; averaging "
-                         f"policies with predictors is not supported")
+    same("predictor (SHA-1 of its arrays)", _predictor_digest)
     theta = {k: np.mean([p.theta[k] for p in policies], axis=0) for k in first.theta}
     members = [{"name": p.name, **{f: p.meta.get(f) for f in MEMBER_FIELDS},
                 "init": (p.meta.get("hyperparameters") or {}).get("init")} for p in policies]
@@ -749,7 +749,21 @@ def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
             "env_kwargs": dict(first.meta.get("env_kwargs") or {}), "seed": int(seed),
             "stop_guard": first.stop_guard, "feature_set": first.feature_set, "averaged_from": names,
             "members": members, "num_timesteps": 0, "curve": []}
-    return ARSCompensatorPolicy(theta, first.base_table, first.scales, meta, name=f"average_s{seed}")
+    return ARSCompensatorPolicy(theta, first.base_table, first.scales, meta, name=f"average_s{seed}",
+                                predictor=first.predictor)
+
+
+def _predictor_digest(policy) -> str | None:
+    """SHA-1 over a policy's stored predictor (its weights, scales and metadata as saved), None without one."""
+    if policy.predictor is None:
+        return None
+    h = hashlib.sha1()
+    for key, arr in sorted(policy.predictor.arrays().items()):
+        arr = np.asarray(arr)
+        h.update(key.encode())
+        h.update(str(arr.dtype).encode() + str(arr.shape).encode())
+        h.update(arr.tobytes())
+    return h.hexdigest()
 
 
 def main(argv=None) -> int:

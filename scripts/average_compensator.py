@@ -17,8 +17,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("policies", nargs="+", help="CompensatorGains ARS / Gauss-Newton policy files (.npz), at least 2")
     ap.add_argument("--seed", type=int, required=True, help="the label of the average (its members keep their own)")
-    ap.add_argument("--export", required=True, help="output .npz (written atomically)")
+    ap.add_argument("--export", default=None,
+                    help="output .npz, written atomically (default runs/average_CompensatorGains-v0_s<seed>.npz under "
+                         "the current folder)")
     a = ap.parse_args(argv)
+    if a.export is None:
+        a.export = f"runs/average_CompensatorGains-v0_s{a.seed}.npz"
     if len(a.policies) < 2:
         ap.error(f"policies: give at least 2 files to average (got {len(a.policies)})")
     if not a.export.endswith(".npz"):

@@ -129,3 +129,37 @@ def test_an_average_cannot_take_a_members_name_or_list_itself(tmp_path, capsys):
     arc.save_policy(avg, tmp_path / "loop_s0.npz")
     with pytest.raises(ValueError, match="lists itself"):
         load_script("training_cost").chain(tmp_path / "loop_s0.npz")
+
+
+def test_members_with_a_predictor_average_when_their_predictors_are_equal(tmp_path):
+    """The predicted-preview policies (feature set hq) average like the others when they store the same predictor:
+    the average keeps it, acts as the mean residual and survives its file; a member whose predictor differs (here
+    one weight changed) is refused with the field named."""
+    a, b = _load("gnq_CompensatorGains-v0_s0"), _load("gnq_CompensatorGains-v0_s1")
+    assert a.predictor is not None
+    avg = arc.average_policies([a, b], seed=3)
+    assert avg.predictor is a.predictor and avg.feature_set == "hq"
+    for k in a.theta:
+        np.testing.assert_array_equal(avg.theta[k], (a.theta[k] + b.theta[k]) / 2.0)
+    back = arc.load_policy(arc.save_policy(avg, tmp_path / "avg.npz"))
+    assert arc._predictor_digest(back) == arc._predictor_digest(a)
+    from agents.predictor import Predictor
+    w = {k: v.copy() for k, v in b.predictor.W.items()}
+    key = sorted(w)[0]
+    w[key].flat[0] += 1e-6
+    other = arc.ARSCompensatorPolicy(b.theta, b.base_table, b.scales, dict(b.meta), name="other",
+                                     predictor=Predictor(w, b.predictor.scales, b.predictor.meta))
+    with pytest.raises(ValueError, match="predictor"):
+        arc.average_policies([a, other], seed=0)
+    with pytest.raises(ValueError, match="feature_set differs"):
+        arc.average_policies([a, _load("gnsp_CompensatorGains-v0_s0")], seed=0)
+
+
+def test_cli_default_output_goes_under_runs_in_the_current_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    script = load_script("average_compensator")
+    assert script.main(["--seed", "5", str(TRAINED / "gnsp_CompensatorGains-v0_s0.npz"),
+                        str(TRAINED / "gnsp_CompensatorGains-v0_s1.npz")]) == 0
+    out = tmp_path / "runs" / "average_CompensatorGains-v0_s5.npz"
+    assert out.is_file() and arc.load_policy(out).meta["seed"] == 5
+    assert str(Path("runs") / "average_CompensatorGains-v0_s5.npz") in capsys.readouterr().out
