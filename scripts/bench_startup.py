@@ -1,6 +1,7 @@
 """Benchmark (issue 15, first use): `import towenv`, the first run of README command 1, and a cached run.
 
-* ``import towenv``: wall time of ``python -c "import towenv"`` in fresh processes, median of ``--imports``;
+* ``import towenv``: wall time of ``python -P -c "import towenv"`` in fresh processes (``-P``: the current folder
+  is not put on the path, as for the console script), median of ``--imports``;
 * first run: ``towenv simulate two_part_tow_1 --duration 120 --out <tmp>`` (the console script next to this
   Python, plots included) with an empty numba cache (a fresh
   ``NUMBA_CACHE_DIR``), CPU time of the whole command (user + system of the child) — what a user pays once
@@ -58,7 +59,7 @@ def main(argv=None):
     env = dict(os.environ)
     if a.numba_opt is not None:
         env["NUMBA_OPT"] = str(a.numba_opt)
-    imports = [_child_cpu([sys.executable, "-c", "import towenv"], env)[1] for _ in range(a.imports)]
+    imports = [_child_cpu([sys.executable, "-P", "-c", "import towenv"], env)[1] for _ in range(a.imports)]
     with tempfile.TemporaryDirectory() as tmp:
         env["NUMBA_CACHE_DIR"] = str(Path(tmp) / "numba")
         out = Path(tmp) / "out"
@@ -77,7 +78,7 @@ def main(argv=None):
     print(f"# towenv first use — Python {sys.version.split()[0]}, {os.cpu_count()} cores, {opt}")
     print(f"import towenv: median {statistics.median(imports):.2f} s wall (min {min(imports):.2f}, max "
           f"{max(imports):.2f}; {len(imports)} fresh processes; goal ≤ 1 s)")
-    src = subprocess.run([sys.executable, "-c", "import towenv; print(towenv.__file__)"], env=env,
+    src = subprocess.run([sys.executable, "-P", "-c", "import towenv; print(towenv.__file__)"], env=env,
                          capture_output=True, text=True).stdout.strip()
     print(f"towenv measured: {src}")
     print("README command 1 (towenv simulate two_part_tow_1 --duration 120 --out ..., with its plots):")
