@@ -716,9 +716,10 @@ def average_policies(policies: list, seed: int) -> ARSCompensatorPolicy:
     in its weights, so it is also the mean of their log-gain residuals before the action clip). The members must be
     one class acting alike: the same feature set, feature scales, skyhook gain table, stop guard, environment
     keywords and sea-state keys, and the same stored predictor or none (ValueError naming the differing field and
-    members otherwise; the average keeps the members' predictor). ``seed`` labels the average (its members carry their own training seeds); ``meta["averaged_from"]``
-    lists the members' names (scripts/training_cost.py follows them to the members' files and their ``--init``
-    chains) and ``meta["members"]`` their training records (``init`` included; the report's description)."""
+    members otherwise; the average keeps the members' predictor). ``seed`` labels the average (its members carry
+    their own training seeds); ``meta["averaged_from"]`` lists the members' names (scripts/training_cost.py follows
+    them to the members' files and their ``--init`` chains) and ``meta["members"]`` their training records
+    (``init`` included; the report's description)."""
     if len(policies) < 2:
         raise ValueError(f"average_policies: needs at least 2 policies (got {len(policies)})")
     first = policies[0]

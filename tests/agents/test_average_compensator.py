@@ -133,8 +133,8 @@ def test_an_average_cannot_take_a_members_name_or_list_itself(tmp_path, capsys):
 
 def test_members_with_a_predictor_average_when_their_predictors_are_equal(tmp_path):
     """The predicted-preview policies (feature set hq) average like the others when they store the same predictor:
-    the average keeps it, acts as the mean residual and survives its file; a member whose predictor differs (here
-    one weight changed) is refused with the field named."""
+    the average keeps it, its weights are the members' mean and it survives its file; a member whose predictor
+    differs (here one weight changed) is refused with the field named."""
     a, b = _load("gnq_CompensatorGains-v0_s0"), _load("gnq_CompensatorGains-v0_s1")
     assert a.predictor is not None
     avg = arc.average_policies([a, b], seed=3)
