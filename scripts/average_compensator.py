@@ -3,8 +3,9 @@ two Gauss-Newton chains from one ARS start with disjoint training seeds (docs/ag
 
     python scripts/average_compensator.py --seed 0 --export runs/chain/gnsm_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s1.npz
 
-The members' files must lie next to each other (and their --init chains next to them) for scripts/training_cost.py
-to add up the average's training cost.
+scripts/training_cost.py adds up the average's training cost from its members, looked up next to the average, and
+their --init chains next to them: write the average into the members' folder (``--export``) for that; the default,
+runs/average_CompensatorGains-v0_s<seed>.npz under the current folder, says so when the members lie elsewhere.
 """
 import argparse
 import sys
@@ -43,6 +44,9 @@ def main(argv=None) -> int:
     Path(a.export).parent.mkdir(parents=True, exist_ok=True)
     out = arc.save_policy(avg, a.export)
     print(f"[average] wrote {out}: mean of {', '.join(m.name for m in members)}", flush=True)
+    if any(Path(p).resolve().parent != Path(out).resolve().parent for p in a.policies):
+        print("[average] note: its members are not in its folder, so scripts/training_cost.py cannot add up its cost "
+              "(it looks them up next to the average)", flush=True)
     return 0
 
 

@@ -72,6 +72,7 @@ def test_cli_writes_a_file_that_reports_and_costs_name_its_members(tmp_path, cap
     script = load_script("average_compensator")
     assert script.main(["--seed", "0", "--export", str(out), str(tmp_path / "gnsp_CompensatorGains-v0_s0.npz"),
                         str(tmp_path / "gnsp_CompensatorGains-v0_s1.npz")]) == 0
+    assert "cannot add up its cost" not in capsys.readouterr().out      # members next to it: no note
     avg = arc.load_policy(out)
     assert avg.meta["averaged_from"] == ["gnsp_CompensatorGains-v0_s0", "gnsp_CompensatorGains-v0_s1"]
     desc = trained_description(avg.meta)
@@ -162,4 +163,6 @@ def test_cli_default_output_goes_under_runs_in_the_current_folder(tmp_path, monk
                         str(TRAINED / "gnsp_CompensatorGains-v0_s1.npz")]) == 0
     out = tmp_path / "runs" / "average_CompensatorGains-v0_s5.npz"
     assert out.is_file() and arc.load_policy(out).meta["seed"] == 5
-    assert str(Path("runs") / "average_CompensatorGains-v0_s5.npz") in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert str(Path("runs") / "average_CompensatorGains-v0_s5.npz") in printed
+    assert "training_cost.py cannot add up its cost" in printed        # the members lie in agents/trained
