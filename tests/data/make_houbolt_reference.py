@@ -54,6 +54,9 @@ runs ``series_multitow`` with ``solver.series_coupling = "relaxed"``, the coupli
 299a4cc checkout has no such field, so the override is applied by the test, not in ``CASES``); the monolithic
 coupling converges to the same solution (tests/unit/test_series_coupling.py).
 
+Since the adaptive Newton predictor became the default (2026-12-06: ``solver.predictor``), the test also runs every
+case with ``solver.predictor = "quadratic"``, the predictor of the 299a4cc kernel.
+
 Do not regenerate it with a changed kernel unless the change is meant to alter the results.
 """
 from pathlib import Path

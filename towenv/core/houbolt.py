@@ -13,7 +13,7 @@ from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_AFT_TOW_POINT, BP_
                      C_B, C_K, C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
                      FAIL_STRETCH, FREE, NEED_REMESH, N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS,
                      N_STEP_CUTS, OK, PITCH_LIMIT, RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED,
-                     S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RECHART_PITCH,
+                     S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RECHART_PITCH,
                      S_RELATIVE_TOLERANCE, S_TOLERANCE, WS_LEN, WS_PAID, WS_V, W_LNOM, W_MODE, W_SEG)
 from .actuators import _compensator_node, _end_stop_force, _winch_speed
 from .body_dynamics import (_condense, _rotational_stiffness, _translational_damping, aft_rotational_stiffness,
@@ -66,10 +66,14 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     planar = settings.shape[0] > S_PLANAR and settings[S_PLANAR] != 0.0
     # Newton stopping on the estimated remaining error (solver.newton_stop = "estimate")
     stop_estimate = settings.shape[0] > S_NEWTON_ESTIMATE and settings[S_NEWTON_ESTIMATE] != 0.0
+    # the predictor's orders chosen step by step from its memory (solver.predictor = "adaptive")
+    adaptive = settings.shape[0] > S_PREDICTOR and settings[S_PREDICTOR] != 0.0
     prev_d = 0.0
     prev_a = 0.0
     hist_r, hist_ang, tens_hist, top_react = state.hist_r, state.hist_ang, state.tens_hist, state.top_react
     cstate, chart = state.cstate, state.chart
+    older_r, older_ang, older_tens = state.older_r, state.older_ang, state.older_tens
+    cubic_r, cubic_ang, quad_tens, pred_valid = state.cubic_r, state.cubic_ang, state.quad_tens, state.pred_valid
     tang, stretched, drag, bmat, madd, mnode = ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd, ws.mnode
     bnode, fnode, acon, qvec, rs, vs, kd, kb = ws.bnode, ws.fnode, ws.acon, ws.qvec, ws.rs, ws.vs, ws.kd, ws.kb
     rhs, dT, gres, tens, bX, by, blam, angs = ws.rhs, ws.dT, ws.gres, ws.tens, ws.bX, ws.by, ws.blam, ws.angs
@@ -87,7 +91,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     cnode = int(comp[C_NODE])
     act_new = actuator_lag(dt, comp, cmode, cstate)
     predict(top_node, r_top_new, hist_r, hist_ang, tens_hist, chart, body_node, body_aft_node, bp, rs, angs, tens,
-            tmp33)
+            tmp33, older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens, pred_valid)
 
     # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
     any_aft, any_merged = series_flags(body_aft_node, tn_nseg)
@@ -165,7 +169,8 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     # --- checks and commit
     bad_kind, bad_elem = commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, tens, rs, angs,
                                 r_t, r_tm1, r_tm2, hist_r, hist_ang, tens_hist, top_react, react, node_nseg, node_segs,
-                                node_sgn, tang, mnode, fnode)
+                                node_sgn, tang, mnode, fnode, adaptive, older_r, older_ang, older_tens, cubic_r, cubic_ang,
+                                quad_tens, pred_valid)
     if bad_kind != OK:
         return bad_kind, it, bad_elem, maxd
     return OK, it, -1, maxd
@@ -205,24 +210,82 @@ def actuator_lag(dt, comp, cmode, cstate):
 
 @njit_internal
 def predict(top_node, r_top_new, hist_r, hist_ang, tens_hist, chart, body_node, body_aft_node, bp, rs, angs, tens,
-            tmp33):
-    """Predictor of the Newton iteration: positions and body angles extrapolated from the last three time levels
-    (cubic), the tow point at its new position, tensions extrapolated linearly (clamped at 0)."""
+            tmp33, older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens, pred_valid):
+    """Predictor of the Newton iteration: node positions and body angles extrapolated quadratically from the last
+    three time levels, the tow point at its new position, tensions extrapolated linearly (clamped at 0) — or, per
+    node, body and segment where the predictor's memory says so (written by :func:`choose_predictor` under
+    ``solver.predictor = "adaptive"``), one order higher with the level before: cubically, and quadratically."""
     nn = rs.shape[0]
     nb = body_node.shape[0]
     ns = tens.shape[0]
+    valid = pred_valid[0] != 0.0
     for a in range(nn):
-        for i in range(3):
-            rs[a, i] = 3.0 * hist_r[0, a, i] - 3.0 * hist_r[1, a, i] + hist_r[2, a, i]
+        if valid and cubic_r[a] != 0.0:
+            for i in range(3):
+                rs[a, i] = 4.0 * hist_r[0, a, i] - 6.0 * hist_r[1, a, i] + 4.0 * hist_r[2, a, i] - older_r[a, i]
+        else:
+            for i in range(3):
+                rs[a, i] = 3.0 * hist_r[0, a, i] - 3.0 * hist_r[1, a, i] + hist_r[2, a, i]
     for i in range(3):
         rs[top_node, i] = r_top_new[i]
     for b in range(nb):
-        for i in range(3):
-            angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
+        if valid and cubic_ang[b] != 0.0:
+            for i in range(3):
+                angs[b, i] = (4.0 * hist_ang[0, b, i] - 6.0 * hist_ang[1, b, i] + 4.0 * hist_ang[2, b, i]
+                              - older_ang[b, i])
+        else:
+            for i in range(3):
+                angs[b, i] = 3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i]
     place_aft_nodes(rs, angs, chart, body_node, body_aft_node, bp, tmp33)
     for s in range(ns):
-        tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
+        if valid and quad_tens[s] != 0.0:
+            tp = 3.0 * tens_hist[0, s] - 3.0 * tens_hist[1, s] + older_tens[s]
+        else:
+            tp = 2.0 * tens_hist[0, s] - tens_hist[1, s]      # linear extrapolation of the tensions
         tens[s] = tp if tp > 0.0 else 0.0
+
+
+@njit_internal
+def choose_predictor(rs, angs, tens, hist_r, hist_ang, tens_hist, older_r, older_ang, older_tens, cubic_r,
+                     cubic_ang, quad_tens, pred_valid):
+    """The predictor's choice for the next step, per node, body and segment: the extrapolation that would have
+    predicted this step's converged solution better (a node's or body's largest error over its three
+    coordinates; a tie keeps the lower order); without a valid memory the lower orders. Then the oldest levels
+    go into the memory (before :func:`commit` shifts the history)."""
+    valid = pred_valid[0] != 0.0
+    for a in range(rs.shape[0]):
+        e2 = 0.0
+        e3 = 0.0
+        for i in range(3):
+            x = rs[a, i]
+            e2 = max(e2, abs(3.0 * hist_r[0, a, i] - 3.0 * hist_r[1, a, i] + hist_r[2, a, i] - x))
+            e3 = max(e3, abs(4.0 * hist_r[0, a, i] - 6.0 * hist_r[1, a, i] + 4.0 * hist_r[2, a, i] - older_r[a, i]
+                             - x))
+        cubic_r[a] = 1.0 if valid and e3 < e2 else 0.0
+    for b in range(angs.shape[0]):
+        e2 = 0.0
+        e3 = 0.0
+        for i in range(3):
+            x = angs[b, i]
+            e2 = max(e2, abs(3.0 * hist_ang[0, b, i] - 3.0 * hist_ang[1, b, i] + hist_ang[2, b, i] - x))
+            e3 = max(e3, abs(4.0 * hist_ang[0, b, i] - 6.0 * hist_ang[1, b, i] + 4.0 * hist_ang[2, b, i]
+                             - older_ang[b, i] - x))
+        cubic_ang[b] = 1.0 if valid and e3 < e2 else 0.0
+    for s in range(tens.shape[0]):
+        t1 = 2.0 * tens_hist[0, s] - tens_hist[1, s]
+        t2 = 3.0 * tens_hist[0, s] - 3.0 * tens_hist[1, s] + older_tens[s]
+        e2 = abs((t1 if t1 > 0.0 else 0.0) - tens[s])
+        e3 = abs((t2 if t2 > 0.0 else 0.0) - tens[s])
+        quad_tens[s] = 1.0 if valid and e3 < e2 else 0.0
+    for a in range(rs.shape[0]):
+        for i in range(3):
+            older_r[a, i] = hist_r[2, a, i]
+    for b in range(angs.shape[0]):
+        for i in range(3):
+            older_ang[b, i] = hist_ang[2, b, i]
+    for s in range(tens.shape[0]):
+        older_tens[s] = tens_hist[1, s]
+    pred_valid[0] = 1.0
 
 
 @njit_internal
@@ -740,10 +803,13 @@ def end_stop_contact(dt, top_node, cnode, comp, r_t, r_tm1, r_tm2, rs, node_nseg
 
 @njit_internal
 def commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, tens, rs, angs, r_t, r_tm1, r_tm2,
-           hist_r, hist_ang, tens_hist, top_react, react, node_nseg, node_segs, node_sgn, tang, mnode, fnode):
+           hist_r, hist_ang, tens_hist, top_react, react, node_nseg, node_segs, node_sgn, tang, mnode, fnode,
+           adaptive, older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens, pred_valid):
     """Checks of the converged step (strain limit, finite positions) and, if they pass, the commit: the top
-    reaction, the compensator's contact/hit/penetration state and the time levels shifted. Returns (OK, −1) or
-    (FAIL_STRETCH, segment) / (FAIL_NAN, node) with ``state`` untouched."""
+    reaction, the compensator's contact/hit/penetration state and the time levels shifted — with ``adaptive``
+    (solver.predictor) the predictor's choice for the next step made (:func:`choose_predictor`) and the oldest
+    level kept in its memory. Returns (OK, −1) or (FAIL_STRETCH, segment) / (FAIL_NAN, node) with ``state``
+    untouched."""
     nn = rs.shape[0]
     ns = tens.shape[0]
     nb = angs.shape[0]
@@ -772,6 +838,9 @@ def commit(dt, top_node, cnode, cmode, act_new, max_strain, comp, cstate, ea, te
         cstate[CS_ACT] = act_new
     for i in range(3):
         top_react[i] = react[i]
+    if adaptive:
+        choose_predictor(rs, angs, tens, hist_r, hist_ang, tens_hist, older_r, older_ang, older_tens, cubic_r,
+                         cubic_ang, quad_tens, pred_valid)
     for a in range(nn):
         for i in range(3):
             hist_r[2, a, i] = hist_r[1, a, i]
@@ -917,6 +986,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
         for b in range(nb):
             if abs(hist_ang[0, b, 1]) > rc_pitch:
                 rechart_body(b, hist_ang, chart, rc_lam, rc_lam0, rc_new, rc_tmp)
+                state.pred_valid[0] = 0.0       # the memory's angles are in the old chart
                 if counters.shape[0] > 4:
                     counters[N_RECHARTS] += 1
         if every > 0:
@@ -940,6 +1010,9 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             counters[N_MAX_ITERATIONS] = it
         if st != OK:
             _copy_step_state(hist_r, hist_ang, tens_hist, cstate, s_hist_r, s_hist_ang, s_tens, s_cstate)
+            # the sub-steps re-space the history: the predictor's memory does not continue it (nor, after them,
+            # the history restored to the spacing dt)
+            state.pred_valid[0] = 0.0
             ok = False
             for cut in range(1, max_cuts + 1):
                 nsub = 2 ** cut
@@ -981,10 +1054,12 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                             hist_ang[2, b, i] = s_hist_ang[1, b, i]
                     for s in range(ns):
                         tens_hist[1, s] = s_tens[0, s]
+                    state.pred_valid[0] = 0.0
                     ok = True
                     break
             if not ok:
                 _copy_step_state(s_hist_r, s_hist_ang, s_tens, s_cstate, hist_r, hist_ang, tens_hist, cstate)
+                state.pred_valid[0] = 0.0
                 if wmode > 0:
                     l0[wseg] = l_old
                 return st, k, el, md

@@ -46,7 +46,8 @@ S_AS_PUBLISHED = 6          # 1: the thesis's tension recursion instead of the t
 S_RECHART_PITCH = 7         # rad (optional: shorter arrays use kernels.RECHART_PITCH)
 S_PLANAR = 8                # 1: vertical-plane model (optional)
 S_NEWTON_ESTIMATE = 9       # 1: newton_stop = "estimate" (optional)
-SETTINGS_SIZE = 10
+S_PREDICTOR = 10            # 1: predictor = "adaptive" (optional; absent or 0: "quadratic")
+SETTINGS_SIZE = 11
 
 
 # ------------------------------------------------------------------------------------------------------

@@ -100,6 +100,15 @@ class TimeLevels(NamedTuple):
     top_react: np.ndarray       # (3,): force of the cable on its top node
     cstate: np.ndarray          # compensator state (kernels.CS_*)
     chart: np.ndarray           # (nb, 3, 3): each body's attitude chart
+    # the predictor's memory (solver.predictor = "adaptive"; houbolt.predict / choose_predictor): the level before
+    # the oldest above, and per node / body / segment whether the next step extrapolates one order higher (1.0)
+    older_r: np.ndarray         # (nn, 3): node positions at t − 3Δt
+    older_ang: np.ndarray       # (nb, 3): body Euler angles at t − 3Δt (in the charts above)
+    older_tens: np.ndarray      # (ns,): segment tensions at t − 2Δt
+    cubic_r: np.ndarray         # (nn,): 1.0: the node's position extrapolated cubically (else quadratically)
+    cubic_ang: np.ndarray       # (nb,): 1.0: the body's angles extrapolated cubically (else quadratically)
+    quad_tens: np.ndarray       # (ns,): 1.0: the segment's tension extrapolated quadratically (else linearly)
+    pred_valid: np.ndarray      # (1,): 1.0 while the memory continues the time levels (else the lower orders)
 
 
 class SavedStep(NamedTuple):

@@ -45,6 +45,8 @@ class Snapshot:
     system: object = None
     l0: np.ndarray | None = None
     chart: np.ndarray | None = None     # per-body attitude chart (None: identity, snapshots of older code)
+    # the Houbolt predictor's memory (Simulator.older; None: forgotten)
+    predictor: tuple | None = None
 
 
 def _scene_default(name):
@@ -71,12 +73,15 @@ class SolverSettings:
     rechart_pitch: float = K.RECHART_PITCH
     planar: bool = _scene_default("planar")
     newton_stop: str = _scene_default("newton_stop")
+    predictor: str = _scene_default("predictor")
 
     def array(self):
         if not (0.0 <= self.rechart_pitch <= 1.2):
             raise ValueError(f"rechart_pitch: must be within [0, 1.2] rad (got {self.rechart_pitch!r})")
         if self.newton_stop not in ("change", "estimate"):
             raise ValueError(f"solver.newton_stop: must be 'change' or 'estimate' (got {self.newton_stop!r})")
+        if self.predictor not in ("adaptive", "quadratic"):
+            raise ValueError(f"solver.predictor: must be 'adaptive' or 'quadratic' (got {self.predictor!r})")
         a = np.empty(L.SETTINGS_SIZE)
         a[L.S_TOLERANCE] = self.tolerance
         a[L.S_RELATIVE_TOLERANCE] = self.relative_tolerance
@@ -88,6 +93,7 @@ class SolverSettings:
         a[L.S_RECHART_PITCH] = self.rechart_pitch
         a[L.S_PLANAR] = 1.0 if self.planar else 0.0
         a[L.S_NEWTON_ESTIMATE] = 1.0 if self.newton_stop == "estimate" else 0.0
+        a[L.S_PREDICTOR] = 1.0 if self.predictor == "adaptive" else 0.0
         return a
 
 
@@ -326,8 +332,10 @@ class Simulator:
         self.body_chart = np.tile(np.eye(3), (nb, 1, 1))
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
+        self._older = (np.zeros((nn, 3)), np.zeros((nb, 3)), np.zeros(ns), np.zeros(nn), np.zeros(nb), np.zeros(ns),
+                       np.zeros(1))
         self._state = TimeLevels(self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate,
-                                 self.body_chart)
+                                 self.body_chart, *self._older)
         self._ws = HouboltWork.allocate(nn, ns, nb)
         self._saved = SavedStep.allocate(nn, ns, nb)
         if not hasattr(self, "counters"):
@@ -388,6 +396,7 @@ class Simulator:
             self.hist_r[k] = r0 - k * dt * U
             self.hist_ang[k] = ang0
         self.tens_hist[:] = T0
+        self.forget_predictor_history()
         self.step_count = 0
         settle = float(self.settings.settle_time or 0.0)
         if settle > 0:
@@ -435,9 +444,21 @@ class Simulator:
         snap = Snapshot(self.hist_r.copy(), self.hist_ang.copy(), self.tens_hist.copy(), self.top_react.copy(),
                         self.step_count, self.cstate.copy(), self.wstate.copy(), self.comp.copy(), self.winch.copy(),
                         self.system if winch else None, self.system.l0.copy() if winch else None,
-                        self.body_chart.copy())
+                        self.body_chart.copy(), tuple(a.copy() for a in self._older))
         self.scheme.snapshot(snap)
         return snap
+
+    @property
+    def older(self) -> tuple:
+        """The Houbolt predictor's memory (older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens,
+        pred_valid), by reference: ``model.TimeLevels``' last seven arrays (solver.predictor, docs/architecture.md)."""
+        return self._older
+
+    def forget_predictor_history(self) -> None:
+        """The Houbolt predictor's memory no longer continues the time levels (they were written from outside
+        the step: initial state, remesh, restore of an older snapshot, another scheme): the next steps extrapolate
+        with the lower orders until a step has been committed on top of them."""
+        self._older[-1][:] = 0.0
 
     def restore(self, snap: Snapshot) -> None:
         if snap.system is not None and snap.system is not self.system:
@@ -452,6 +473,11 @@ class Simulator:
         else:
             self.body_chart[...] = np.eye(3)
         self.tens_hist[...] = snap.tens_hist
+        if snap.predictor is not None and all(a.shape == b.shape for a, b in zip(snap.predictor, self._older)):
+            for a, b in zip(self._older, snap.predictor):
+                a[...] = b
+        else:
+            self.forget_predictor_history()
         self.top_react[...] = snap.top_react
         self.cstate[...] = snap.cstate
         self.wstate[...] = snap.wstate

@@ -690,6 +690,10 @@ class Solver(_Model):
     settle_time: Num(ge=0, le=3600, unit="s") = 0.0
     planar: bool = False        # 2-D vertical-plane model: lateral node motion, body roll and yaw frozen
     newton_stop: _choice("change", "estimate") = "change"
+    # Houbolt's Newton predictor: each step chooses, per kind of unknown, the extrapolation (quadratic or cubic
+    # positions and angles, linear or quadratic tensions) that would have predicted the last step better
+    # ("adaptive"), or always the lower orders ("quadratic", the predictor before 2026-12-06; docs/architecture.md)
+    predictor: _choice("adaptive", "quadratic") = "adaptive"
     # series tows: the tail's top segments in the body's clique of the tension solve ("monolithic"), or its pull
     # as a relaxed load inside the Newton loop ("relaxed", the coupling before 2026-12; docs/model-notes.md)
     series_coupling: _choice("monolithic", "relaxed") = "monolithic"

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from ..core.layout import S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_RELATIVE_TOLERANCE, S_TOLERANCE
+from ..core.layout import (S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
 from ..core import layout as L
 from ..core.layout import BP_AFT_TOW_POINT, BP_REDUCED_DOF, BP_TAIL_MASS
 import scipy.sparse as sp
@@ -500,6 +500,8 @@ class TwinStep:
     element: int = -1
     max_dT: float = 0.0
     body_chart: np.ndarray | None = None
+    older: tuple | None = None      # the predictor's memory (Simulator.older: older_r, older_ang, older_tens, cubic_r,
+    #                                 cubic_ang, quad_tens, pred_valid)
 
 
 def _settings_array(settings):
@@ -742,9 +744,20 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     merged = np.array([c >= 0 and getattr(sys, "series_coupling", "relaxed") == "monolithic"
                        for c in sys.body_aft_node], bool)
 
+    adaptive = settings.shape[0] > S_PREDICTOR and settings[S_PREDICTOR] != 0.0
+    older = getattr(sim_like, "older", None)
+    if older is None:
+        older = (np.zeros_like(hist_r[0]), np.zeros_like(hist_ang[0]), np.zeros_like(tens_hist[0]),
+                 np.zeros(hist_r.shape[1]), np.zeros(hist_ang.shape[1]), np.zeros(tens_hist.shape[1]), np.zeros(1))
+    older = tuple(np.array(a, float) for a in older)
+    valid = older[6][0] != 0.0
+    up_r = (older[3] != 0.0) & valid         # one order higher, per node / body / segment
+    up_ang = (older[4] != 0.0) & valid
+    up_tens = (older[5] != 0.0) & valid
+
     def fail(status, it, elem, maxd):
         return TwinStep(sys, sim_like.settings, hist_r, hist_ang, tens_hist, old_react, status, it, elem, maxd,
-                        chart)
+                        chart, older)
 
     nb = sys.body_node.shape[0]
     top = sys.top_node
@@ -754,12 +767,15 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     r_hist_term = 2.5 * hist_r[0] - 2.0 * hist_r[1] + 0.5 * hist_r[2]
     a_hist_term = 2.5 * hist_ang[0] - 2.0 * hist_ang[1] + 0.5 * hist_ang[2]
 
-    # predictor
-    rs = 3.0 * hist_r[0] - 3.0 * hist_r[1] + hist_r[2]
+    # predictor (one order higher where the memory says so: solver.predictor = "adaptive", kernel's commit)
+    rs = np.where(up_r[:, None], 4.0 * hist_r[0] - 6.0 * hist_r[1] + 4.0 * hist_r[2] - older[0],
+                  3.0 * hist_r[0] - 3.0 * hist_r[1] + hist_r[2])
     rs[top] = r_top_new
-    angs = 3.0 * hist_ang[0] - 3.0 * hist_ang[1] + hist_ang[2]
+    angs = np.where(up_ang[:, None], 4.0 * hist_ang[0] - 6.0 * hist_ang[1] + 4.0 * hist_ang[2] - older[1],
+                    3.0 * hist_ang[0] - 3.0 * hist_ang[1] + hist_ang[2])
     rs = place_aft_nodes_np(sys, rs, angs, chart)
-    tens = np.maximum(2.0 * tens_hist[0] - tens_hist[1], 0.0)     # linear extrapolation, T ≥ 0
+    tens = np.maximum(np.where(up_tens, 3.0 * tens_hist[0] - 3.0 * tens_hist[1] + older[2],
+                               2.0 * tens_hist[0] - tens_hist[1]), 0.0)     # linear extrapolation, T ≥ 0
     ea = sys.ea
     compliance = np.where(np.isinf(ea), 0.0, sys.l0 / np.where(np.isinf(ea), 1.0, ea))
 
@@ -964,4 +980,25 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     new_hist_r = np.stack([rs, hist_r[0], hist_r[1]])
     new_hist_ang = np.stack([angs, hist_ang[0], hist_ang[1]])
     new_tens = np.stack([tens, tens_hist[0]])
-    return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd, chart)
+    if adaptive:
+        older = choose_predictor_np(rs, angs, tens, hist_r, hist_ang, tens_hist, older)
+    return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd, chart,
+                    older)
+
+
+def choose_predictor_np(rs, angs, tens, hist_r, hist_ang, tens_hist, older):
+    """Twin of ``houbolt.choose_predictor``: per node, body and segment, the extrapolation that would have
+    predicted the converged (rs, angs, tens) better (a node's or body's largest error over its coordinates; a tie
+    keeps the lower order), then the oldest levels kept. Returns the new memory (``Simulator.older``'s layout)."""
+    valid = older[6][0] != 0.0
+    e2 = np.max(np.abs(3.0 * hist_r[0] - 3.0 * hist_r[1] + hist_r[2] - rs), axis=1)
+    e3 = np.max(np.abs(4.0 * hist_r[0] - 6.0 * hist_r[1] + 4.0 * hist_r[2] - older[0] - rs), axis=1)
+    cubic_r = ((e3 < e2) & valid).astype(float)
+    e2 = np.max(np.abs(3.0 * hist_ang[0] - 3.0 * hist_ang[1] + hist_ang[2] - angs), axis=1, initial=0.0)
+    e3 = np.max(np.abs(4.0 * hist_ang[0] - 6.0 * hist_ang[1] + 4.0 * hist_ang[2] - older[1] - angs), axis=1,
+                initial=0.0)
+    cubic_ang = ((e3 < e2) & valid).astype(float)
+    e2 = np.abs(np.maximum(2.0 * tens_hist[0] - tens_hist[1], 0.0) - tens)
+    e3 = np.abs(np.maximum(3.0 * tens_hist[0] - 3.0 * tens_hist[1] + older[2], 0.0) - tens)
+    quad_tens = ((e3 < e2) & valid).astype(float)
+    return (hist_r[2].copy(), hist_ang[2].copy(), tens_hist[1].copy(), cubic_r, cubic_ang, quad_tens, np.ones(1))
