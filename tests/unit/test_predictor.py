@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from towenv.core import kernels as K
+from towenv.core.layout import PS_VALID
 from towenv.core.simulator import Simulator, load
 from towenv.verification import twin
 
@@ -97,7 +98,7 @@ def test_quadratic_predictor_keeps_no_memory():
 def test_memory_travels_with_snapshots_and_is_forgotten_without_one():
     sim = _sim()
     sim.advance(10.0)
-    assert sim.older[-1][0] == 1.0
+    assert sim.older[-1][PS_VALID] == 1.0
     snap = sim.snapshot()
     sim.advance_steps(40)
     first = sim.hist_r.copy(), sim.tens_hist.copy(), sim.hist_ang.copy()
@@ -107,9 +108,9 @@ def test_memory_travels_with_snapshots_and_is_forgotten_without_one():
         assert np.array_equal(a, b)                 # bit for bit: the memory came back with the snapshot
     import dataclasses
     sim.restore(dataclasses.replace(snap, predictor=None))
-    assert sim.older[-1][0] == 0.0
+    assert sim.older[-1][PS_VALID] == 0.0
     sim.reset()
-    assert sim.older[-1][0] == 0.0                  # the initial state has no step behind it
+    assert sim.older[-1][PS_VALID] == 0.0                  # the initial state has no step behind it
     sim.advance_steps(40)
     fresh = _sim()
     fresh.advance_steps(40)
@@ -127,7 +128,7 @@ def test_a_step_cut_forgets_the_memory():
         sim.advance_steps(1)
         if sim.stats["step_cuts"] > cuts:
             seen += 1
-            assert sim.older[-1][0] == 0.0
+            assert sim.older[-1][PS_VALID] == 0.0
         if seen >= 3:
             break
     assert seen >= 3

@@ -49,6 +49,11 @@ S_NEWTON_ESTIMATE = 9       # 1: newton_stop = "estimate" (optional)
 S_PREDICTOR = 10            # 1: predictor = "adaptive" (optional; absent or 0: "quadratic")
 SETTINGS_SIZE = 11
 
+# the Houbolt predictor's state (TimeLevels.pred_state, float64): solver.predictor = "adaptive"
+PS_VALID = 0                # 1: the memory (TimeLevels.older_*) continues the time levels
+PS_HIGHER = 1               # how many nodes, bodies and segments extrapolate one order higher in the next step
+PRED_STATE_SIZE = 2
+
 
 # ------------------------------------------------------------------------------------------------------
 # step counters (int64, Simulator.counters / KernelData.counters): what Simulator.stats reports

@@ -108,7 +108,7 @@ class TimeLevels(NamedTuple):
     cubic_r: np.ndarray         # (nn,): 1.0: the node's position extrapolated cubically (else quadratically)
     cubic_ang: np.ndarray       # (nb,): 1.0: the body's angles extrapolated cubically (else quadratically)
     quad_tens: np.ndarray       # (ns,): 1.0: the segment's tension extrapolated quadratically (else linearly)
-    pred_valid: np.ndarray      # (1,): 1.0 while the memory continues the time levels (else the lower orders)
+    pred_state: np.ndarray      # (PRED_STATE_SIZE,): memory valid, number of higher-order choices (layout.PS_*)
 
 
 class SavedStep(NamedTuple):

@@ -333,7 +333,7 @@ class Simulator:
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
         self._older = (np.zeros((nn, 3)), np.zeros((nb, 3)), np.zeros(ns), np.zeros(nn), np.zeros(nb), np.zeros(ns),
-                       np.zeros(1))
+                       np.zeros(L.PRED_STATE_SIZE))
         self._state = TimeLevels(self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate,
                                  self.body_chart, *self._older)
         self._ws = HouboltWork.allocate(nn, ns, nb)
@@ -451,14 +451,14 @@ class Simulator:
     @property
     def older(self) -> tuple:
         """The Houbolt predictor's memory (older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens,
-        pred_valid), by reference: ``model.TimeLevels``' last seven arrays (solver.predictor, docs/architecture.md)."""
+        pred_state), by reference: ``model.TimeLevels``' last seven arrays (solver.predictor, docs/architecture.md)."""
         return self._older
 
     def forget_predictor_history(self) -> None:
         """The Houbolt predictor's memory no longer continues the time levels (they were written from outside
         the step: initial state, remesh, restore of an older snapshot, another scheme): the next steps extrapolate
         with the lower orders until a step has been committed on top of them."""
-        self._older[-1][:] = 0.0
+        self._older[-1][L.PS_VALID] = 0.0
 
     def restore(self, snap: Snapshot) -> None:
         if snap.system is not None and snap.system is not self.system:

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from ..core.layout import (S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
+from ..core.layout import (PRED_STATE_SIZE, PS_HIGHER, PS_VALID, S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
 from ..core import layout as L
 from ..core.layout import BP_AFT_TOW_POINT, BP_REDUCED_DOF, BP_TAIL_MASS
 import scipy.sparse as sp
@@ -501,7 +501,7 @@ class TwinStep:
     max_dT: float = 0.0
     body_chart: np.ndarray | None = None
     older: tuple | None = None      # the predictor's memory (Simulator.older: older_r, older_ang, older_tens, cubic_r,
-    #                                 cubic_ang, quad_tens, pred_valid)
+    #                                 cubic_ang, quad_tens, pred_state)
 
 
 def _settings_array(settings):
@@ -748,9 +748,10 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     older = getattr(sim_like, "older", None)
     if older is None:
         older = (np.zeros_like(hist_r[0]), np.zeros_like(hist_ang[0]), np.zeros_like(tens_hist[0]),
-                 np.zeros(hist_r.shape[1]), np.zeros(hist_ang.shape[1]), np.zeros(tens_hist.shape[1]), np.zeros(1))
+                 np.zeros(hist_r.shape[1]), np.zeros(hist_ang.shape[1]), np.zeros(tens_hist.shape[1]),
+                 np.zeros(PRED_STATE_SIZE))
     older = tuple(np.array(a, float) for a in older)
-    valid = older[6][0] != 0.0
+    valid = older[6][PS_VALID] != 0.0
     up_r = (older[3] != 0.0) & valid         # one order higher, per node / body / segment
     up_ang = (older[4] != 0.0) & valid
     up_tens = (older[5] != 0.0) & valid
@@ -981,24 +982,36 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     new_hist_ang = np.stack([angs, hist_ang[0], hist_ang[1]])
     new_tens = np.stack([tens, tens_hist[0]])
     if adaptive:
-        older = choose_predictor_np(rs, angs, tens, hist_r, hist_ang, tens_hist, older)
+        older = choose_predictor_np(it, rs, angs, tens, hist_r, hist_ang, tens_hist, older)
     return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd, chart,
                     older)
 
 
-def choose_predictor_np(rs, angs, tens, hist_r, hist_ang, tens_hist, older):
+def choose_predictor_np(iterations, rs, angs, tens, hist_r, hist_ang, tens_hist, older):
     """Twin of ``houbolt.choose_predictor``: per node, body and segment, the extrapolation that would have
-    predicted the converged (rs, angs, tens) better (a node's or body's largest error over its coordinates; a tie
-    keeps the lower order), then the oldest levels kept. Returns the new memory (``Simulator.older``'s layout)."""
-    valid = older[6][0] != 0.0
-    e2 = np.max(np.abs(3.0 * hist_r[0] - 3.0 * hist_r[1] + hist_r[2] - rs), axis=1)
-    e3 = np.max(np.abs(4.0 * hist_r[0] - 6.0 * hist_r[1] + 4.0 * hist_r[2] - older[0] - rs), axis=1)
-    cubic_r = ((e3 < e2) & valid).astype(float)
-    e2 = np.max(np.abs(3.0 * hist_ang[0] - 3.0 * hist_ang[1] + hist_ang[2] - angs), axis=1, initial=0.0)
-    e3 = np.max(np.abs(4.0 * hist_ang[0] - 6.0 * hist_ang[1] + 4.0 * hist_ang[2] - older[1] - angs), axis=1,
-                initial=0.0)
-    cubic_ang = ((e3 < e2) & valid).astype(float)
+    predicted the converged (rs, angs, tens) better (nodes and bodies: the largest error over the three
+    coordinates, q for the quadratic prediction and q + d for the cubic one, d their difference; segments: the
+    clamped predictions' errors; a tie keeps the lower order; a step converged on its first iteration from the
+    lower orders everywhere keeps them), then the oldest levels kept. Returns the new memory (``Simulator.older``'s
+    layout)."""
+    valid = older[6][PS_VALID] != 0.0
+    kept = (hist_r[2].copy(), hist_ang[2].copy(), tens_hist[1].copy())
+    if valid and iterations <= 1 and older[6][PS_HIGHER] == 0.0:     # converged at once from the lower orders
+        return kept + (older[3].copy(), older[4].copy(), older[5].copy(), older[6].copy())
+
+    def cubic_better(h, x, o):
+        q = 3.0 * h[0] - 3.0 * h[1] + h[2] - x
+        d = h[0] - 3.0 * h[1] + 3.0 * h[2] - o
+        e2 = np.max(np.abs(q), axis=1, initial=0.0)
+        e3 = np.max(np.abs(q + d), axis=1, initial=0.0)
+        return ((e3 < e2) & valid).astype(float)
+
+    cubic_r = cubic_better(hist_r, rs, older[0])
+    cubic_ang = cubic_better(hist_ang, angs, older[1])
     e2 = np.abs(np.maximum(2.0 * tens_hist[0] - tens_hist[1], 0.0) - tens)
     e3 = np.abs(np.maximum(3.0 * tens_hist[0] - 3.0 * tens_hist[1] + older[2], 0.0) - tens)
     quad_tens = ((e3 < e2) & valid).astype(float)
-    return (hist_r[2].copy(), hist_ang[2].copy(), tens_hist[1].copy(), cubic_r, cubic_ang, quad_tens, np.ones(1))
+    state = np.zeros(PRED_STATE_SIZE)
+    state[PS_VALID] = 1.0
+    state[PS_HIGHER] = cubic_r.sum() + cubic_ang.sum() + quad_tens.sum()
+    return kept + (cubic_r, cubic_ang, quad_tens, state)
