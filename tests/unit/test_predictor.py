@@ -153,3 +153,19 @@ def test_an_attitude_rechart_forgets_the_memory():
 def test_a_bad_predictor_is_refused_naming_the_field():
     with pytest.raises(Exception, match="predictor"):
         _sim("cubic")
+
+
+def test_adaptive_predictor_keeps_houbolts_longest_steps():
+    """The stability map's hardest Houbolt cell (shared deck, 80 segments, nominal EA, 8 s half-cosine ramp) at
+    Δt = 0.755 s: the quadratic predictor covers the 16 s (~60 Newton iterations and ~20 step halvings along the
+    way); the adaptive one, whose higher-order start made a step there fail even after four halvings (diverged at
+    t = 10.6 s before the fall-back), must cover it too — a step whose higher-order start fails is taken again
+    from the lower orders before it is cut, and its sub-steps start from the lower orders."""
+    import towenv
+    from towenv.peer.decks import shared_deck
+    sc = shared_deck(segments=80, EA_factor=1.0, ramp=dict(type="half_cosine", duration=8.0))
+    for p in ("quadratic", "adaptive"):
+        sim = towenv.make_simulator(sc, method="houbolt", dt=0.755, predictor=p)
+        sim.advance_steps(int(round(16.0 / 0.755)))
+        assert sim.stats["step_cuts"] > 0          # the edge of the map: steps are cut there
+        assert np.isfinite(sim.top_tension)

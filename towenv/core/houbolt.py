@@ -1036,6 +1036,13 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
         counters[N_ITERATIONS] += it
         if it > counters[N_MAX_ITERATIONS]:
             counters[N_MAX_ITERATIONS] = it
+        if st != OK and state.pred_state[PS_VALID] != 0.0 and state.pred_state[PS_HIGHER] != 0.0:
+            # the adaptive predictor's higher-order start failed: the same step again from the lower orders
+            # before cutting it (at the stability map's longest steps the higher orders can start the Newton
+            # iteration where it does not converge; the state is untouched by the failed attempt)
+            state.pred_state[PS_VALID] = 0.0
+            st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
+            counters[N_ITERATIONS] += it
         if st != OK:
             _copy_step_state(hist_r, hist_ang, tens_hist, cstate, s_hist_r, s_hist_ang, s_tens, s_cstate)
             # the sub-steps re-space the history: the predictor's memory does not continue it (nor, after them,
@@ -1065,6 +1072,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                         top_sub[i] = _quad_interp(top_path[k, i], s_hist_r[0, top_node, i], s_hist_r[1, top_node, i], tau)
                     if wmode > 0:
                         l0[wseg] = l_old + tau * dl
+                    state.pred_state[PS_VALID] = 0.0        # sub-steps start from the lower orders
                     st, it, el, md = _step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
                     counters[N_ITERATIONS] += it
                     if st != OK:
