@@ -266,30 +266,10 @@ def choose_predictor(iterations, rs, angs, tens, hist_r, hist_ang, tens_hist, ol
         return
     higher = 0.0
     for a in range(rs.shape[0]):
-        e2 = 0.0
-        e3 = 0.0
-        for i in range(3):
-            h0 = hist_r[0, a, i]
-            h1 = hist_r[1, a, i]
-            h2 = hist_r[2, a, i]
-            q = 3.0 * h0 - 3.0 * h1 + h2 - rs[a, i]
-            d = h0 - 3.0 * h1 + 3.0 * h2 - older_r[a, i]
-            e2 = max(e2, abs(q))
-            e3 = max(e3, abs(q + d))
-        cubic_r[a] = 1.0 if valid and e3 < e2 else 0.0
+        cubic_r[a] = 1.0 if valid and _cubic_better(hist_r, rs, older_r, a) else 0.0
         higher += cubic_r[a]
     for b in range(angs.shape[0]):
-        e2 = 0.0
-        e3 = 0.0
-        for i in range(3):
-            h0 = hist_ang[0, b, i]
-            h1 = hist_ang[1, b, i]
-            h2 = hist_ang[2, b, i]
-            q = 3.0 * h0 - 3.0 * h1 + h2 - angs[b, i]
-            d = h0 - 3.0 * h1 + 3.0 * h2 - older_ang[b, i]
-            e2 = max(e2, abs(q))
-            e3 = max(e3, abs(q + d))
-        cubic_ang[b] = 1.0 if valid and e3 < e2 else 0.0
+        cubic_ang[b] = 1.0 if valid and _cubic_better(hist_ang, angs, older_ang, b) else 0.0
         higher += cubic_ang[b]
     for s in range(tens.shape[0]):
         t1 = 2.0 * tens_hist[0, s] - tens_hist[1, s]
@@ -300,6 +280,24 @@ def choose_predictor(iterations, rs, angs, tens, hist_r, hist_ang, tens_hist, ol
         higher += quad_tens[s]
     pred_state[PS_HIGHER] = higher
     remember_levels(hist_r, hist_ang, tens_hist, older_r, older_ang, older_tens, pred_state)
+
+
+@njit_internal
+def _cubic_better(hist, x, older, k):
+    """Whether row ``k`` (a node or a body: three coordinates) of the converged ``x`` was predicted better by the cubic
+    extrapolation (with ``older``) than by the quadratic one, comparing each one's largest error over the
+    coordinates; a tie is not better."""
+    e2 = 0.0
+    e3 = 0.0
+    for i in range(3):
+        h0 = hist[0, k, i]
+        h1 = hist[1, k, i]
+        h2 = hist[2, k, i]
+        q = 3.0 * h0 - 3.0 * h1 + h2 - x[k, i]
+        d = h0 - 3.0 * h1 + 3.0 * h2 - older[k, i]
+        e2 = max(e2, abs(q))
+        e3 = max(e3, abs(q + d))
+    return e3 < e2
 
 
 @njit_internal
