@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from towenv.core import kernels as K
-from towenv.core.layout import PS_VALID
+from towenv.core.layout import PS_HIGHER, PS_VALID
 from towenv.core.simulator import Simulator, load
 from towenv.verification import twin
 
@@ -53,8 +53,10 @@ def test_adaptive_predictor_kernel_matches_twin():
         for key in ("hist_r", "tens_hist", "hist_ang"):
             a, b = getattr(state, key), getattr(sim, key)
             assert np.max(np.abs(a - b)) <= 1e-8 * max(np.max(np.abs(b)), 1e-30), (k, key)
-        for a, b in zip(_memory(state)[3:], _memory(sim)[3:]):
+        for a, b in zip(_memory(state)[3:7], _memory(sim)[3:7]):
             assert np.array_equal(a, b), k
+        for a, b in zip(_memory(state)[7:], _memory(sim)[7:]):       # the bodies' kept finite-difference derivatives
+            assert np.max(np.abs(a - b)) <= 1e-6 * max(np.max(np.abs(b)), 1e-30), k
         for a, b in zip(_memory(state)[:3], _memory(sim)[:3]):
             assert np.max(np.abs(a - b)) <= 1e-8 * max(np.max(np.abs(b)), 1e-30), k
         flags = np.concatenate(_memory(sim)[3:6])
@@ -92,13 +94,14 @@ def test_adaptive_predictor_reaches_the_same_solution_in_fewer_iterations(scene)
 def test_quadratic_predictor_keeps_no_memory():
     sim = _sim("quadratic")
     sim.advance(5.0)
-    assert all(np.all(a == 0.0) for a in sim.older)
+    assert all(np.all(a == 0.0) for a in sim.older[:6])
+    assert sim.older[6][PS_VALID] == sim.older[6][PS_HIGHER] == 0.0
 
 
 def test_memory_travels_with_snapshots_and_is_forgotten_without_one():
     sim = _sim()
     sim.advance(10.0)
-    assert sim.older[-1][PS_VALID] == 1.0
+    assert sim.older[6][PS_VALID] == 1.0
     snap = sim.snapshot()
     sim.advance_steps(40)
     first = sim.hist_r.copy(), sim.tens_hist.copy(), sim.hist_ang.copy()
@@ -108,9 +111,9 @@ def test_memory_travels_with_snapshots_and_is_forgotten_without_one():
         assert np.array_equal(a, b)                 # bit for bit: the memory came back with the snapshot
     import dataclasses
     sim.restore(dataclasses.replace(snap, predictor=None))
-    assert sim.older[-1][PS_VALID] == 0.0
+    assert sim.older[6][PS_VALID] == 0.0
     sim.reset()
-    assert sim.older[-1][PS_VALID] == 0.0                  # the initial state has no step behind it
+    assert sim.older[6][PS_VALID] == 0.0                  # the initial state has no step behind it
     sim.advance_steps(40)
     fresh = _sim()
     fresh.advance_steps(40)
@@ -128,7 +131,7 @@ def test_a_step_cut_forgets_the_memory():
         sim.advance_steps(1)
         if sim.stats["step_cuts"] > cuts:
             seen += 1
-            assert sim.older[-1][PS_VALID] == 0.0
+            assert sim.older[6][PS_VALID] == 0.0
         if seen >= 3:
             break
     assert seen >= 3

@@ -54,6 +54,9 @@ def test_no_rechart_runs_are_bit_identical_to_the_euler_angle_kernel(scene):
     # likewise the Newton predictor the file was made with: the quadratic one (solver.predictor, 2026-12-06; the
     # adaptive default converges to the same solution within the Newton tolerance: tests/unit/test_predictor.py)
     overrides = dict(overrides, **{"solver.predictor": "quadratic"})
+    # and the bodies' derivatives computed every step, as then (solver.body_derivative_refresh = 1; the default 10
+    # reuses them and converges to the same solution within the tolerance: tests/unit/test_body_derivatives.py)
+    overrides = dict(overrides, **{"solver.body_derivative_refresh": 1})
     sim = ref.run(scene, overrides, steps)
     assert sim.stats["recharts"] == 0
     assert np.all(sim.body_chart == np.eye(3))
@@ -162,14 +165,14 @@ def test_houbolt_step_from_a_recharted_state_matches_twin():
     assert not np.allclose(sim.body_chart, np.eye(3))
     # as kernels.advance does after a re-chart: the predictor's memory holds angles of the old charts (and for
     # the comparison below both steps start from the same, lower-order predictor)
-    sim.forget_predictor_history()
+    sim.forget_step_memory()
     top = sim.path.position(np.array([sim.t + sim.dt]))[0]
     res = kernel_and_twin_step(sim)
     np.testing.assert_array_equal(res.body_chart, sim.body_chart)
     charted_r = sim.hist_r[0].copy()
     charted_att = [twin.body_rotation_np(sim.hist_ang[0, b], sim.body_chart[b]) for b in range(nb)]
     sim.restore(plain)
-    sim.forget_predictor_history()
+    sim.forget_step_memory()
     st, *_ = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
     assert st == K.OK
     # local error of one step: positions within 1e-6 m, attitudes within 1e-6 rad

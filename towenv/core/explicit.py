@@ -340,7 +340,7 @@ class ExplicitScheme(TimeScheme):
         sim.hist_r[2] = self.xr - 2 * dt * self.xv
         sim.tens_hist[1] = sim.tens_hist[0]
         sim.tens_hist[0] = self.xtens
-        sim.forget_predictor_history()
+        sim.forget_step_memory()
         for b in range(sim.system.n_rigid):
             # angle history consistent with the current Euler-angle rates
             ca, sb, cb = np.cos(self.xang[b, 1]), np.sin(self.xang[b, 0]), np.cos(self.xang[b, 0])

@@ -13,7 +13,7 @@ from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_AFT_TOW_POINT, BP_
                      C_B, C_K, C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
                      FAIL_STRETCH, FREE, NEED_REMESH, N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS,
                      N_STEP_CUTS, OK, PITCH_LIMIT, RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED,
-                     PS_HIGHER, PS_VALID, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR,
+                     PS_BODY_AGE, PS_BODY_VALID, PS_HIGHER, PS_VALID, S_BODY_REFRESH, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR,
                      S_PREDICTOR, S_RECHART_PITCH,
                      S_RELATIVE_TOLERANCE, S_TOLERANCE, WS_LEN, WS_PAID, WS_V, W_LNOM, W_MODE, W_SEG)
 from .actuators import _compensator_node, _end_stop_force, _winch_speed
@@ -75,6 +75,10 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     cstate, chart = state.cstate, state.chart
     older_r, older_ang, older_tens = state.older_r, state.older_ang, state.older_tens
     cubic_r, cubic_ang, quad_tens, pred_state = state.cubic_r, state.cubic_ang, state.quad_tens, state.pred_state
+    body_relax, body_damp = state.body_relax, state.body_damp
+    # the bodies' load derivatives: computed on this step's first iteration, or those of an earlier step reused
+    # (solver.body_derivative_refresh)
+    body_fresh = body_derivatives_due(settings, pred_state)
     tang, stretched, drag, bmat, madd, mnode = ws.tang, ws.stretched, ws.drag, ws.bmat, ws.madd, ws.mnode
     bnode, fnode, acon, qvec, rs, vs, kd, kb = ws.bnode, ws.fnode, ws.acon, ws.qvec, ws.rs, ws.vs, ws.kd, ws.kb
     rhs, dT, gres, tens, bX, by, blam, angs = ws.rhs, ws.dT, ws.gres, ws.tens, ws.bX, ws.by, ws.blam, ws.angs
@@ -107,7 +111,8 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                                    cn, ct, can, cat, ea, bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g,
                                    cur_z, cur_v, chart, rs, vs, angs, tang, stretched, drag, bmat, madd, mnode, bnode,
                                    fnode, tens, dang, blam, omg, tmp3, cur_b, fb, mb, bdiag, bkc, scr, tmp33, bdmat,
-                                   react, att, atr, arr, arrinv, hvec, tmp33b, bX, by, tn_nseg, gaft, haft)
+                                   react, att, atr, arr, arrinv, hvec, tmp33b, bX, by, tn_nseg, gaft, haft,
+                                   body_fresh, body_relax, body_damp)
         if bad:
             return FAIL_NAN, it, -1, 0.0
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k
@@ -174,7 +179,44 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                                 cubic_ang, quad_tens, pred_state)
     if bad_kind != OK:
         return bad_kind, it, bad_elem, maxd
+    if body_fresh:
+        pred_state[PS_BODY_VALID] = 1.0
+        pred_state[PS_BODY_AGE] = 1.0
+    else:
+        pred_state[PS_BODY_AGE] += 1.0
     return OK, it, -1, maxd
+
+
+@njit_internal
+def keep_body_derivatives(b, bkc, bdmat, body_relax, body_damp):
+    """Body ``b``'s rotational stiffness and damping (``bkc``, BK_STIFFNESS/BK_DAMPING) and translational damping
+    (``bdmat``) kept in ``body_relax``/``body_damp`` for the next steps."""
+    for i in range(3):
+        body_relax[b, i] = bkc[b, BK_STIFFNESS + i]
+        body_relax[b, 3 + i] = bkc[b, BK_DAMPING + i]
+        for j in range(3):
+            body_damp[b, i, j] = bdmat[b, i, j]
+
+
+@njit_internal
+def reuse_body_derivatives(b, body_relax, body_damp, bkc, bdmat):
+    """The kept derivatives of body ``b`` (:func:`keep_body_derivatives`) back into ``bkc``/``bdmat``."""
+    for i in range(3):
+        bkc[b, BK_STIFFNESS + i] = body_relax[b, i]
+        bkc[b, BK_DAMPING + i] = body_relax[b, 3 + i]
+        for j in range(3):
+            bdmat[b, i, j] = body_damp[b, i, j]
+
+
+@njit_internal
+def body_derivatives_due(settings, pred_state):
+    """Whether the next step computes the rigid bodies' load derivatives afresh (finite differences on its first
+    iteration: :func:`towenv.core.body_dynamics._rotational_stiffness` and ``_translational_damping``) rather
+    than reuse those kept in ``TimeLevels.body_relax``/``body_damp``: always with ``solver.body_derivative_refresh``
+    ≤ 1 (or a settings array without it), when none are kept (``PS_BODY_VALID`` = 0: initial state, a restore
+    without them, a re-chart, a failed step) and when they have served ``refresh`` steps."""
+    refresh = settings[S_BODY_REFRESH] if settings.shape[0] > S_BODY_REFRESH else 1.0
+    return refresh <= 1.0 or pred_state[PS_BODY_VALID] == 0.0 or pred_state[PS_BODY_AGE] >= refresh
 
 
 @njit_internal
@@ -320,14 +362,16 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
                          bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g, cur_z, cur_v, chart, rs, vs, angs,
                          tang, stretched, drag, bmat, madd, mnode, bnode, fnode, tens, dang, blam, omg, tmp3, cur_b,
                          fb, mb, bdiag, bkc, scr, tmp33, bdmat, react, att, atr, arr, arrinv, hvec, tmp33b, bX, by,
-                         tn_nseg, gaft, haft):
+                         tn_nseg, gaft, haft, body_fresh, body_relax, body_damp):
     """Loads and their linearisations at the current iterate ``rs`` (Newton iteration ``it``): node velocities
     (Houbolt, relative to the orbital flow), cable segment loads, node assembly, the rigid bodies' loads
     condensed onto their tow-point nodes (their rotational stiffness and damping on the first iteration), and
     for series tows the tail's restoring moment. With the monolithic series coupling (an aft node ``c`` with
     ``tn_nseg[c] == 0``) the tail segments' pull is left out of the body's loads here — it enters the tension
     solve through H_b and the rotation through G_b (``gaft``, ``haft``: :func:`aft_transfer`) — and only the aft
-    node's own loads and inertia are a load on the body. Returns True when a body's condensation failed (NaN)."""
+    node's own loads and inertia are a load on the body. The bodies' load derivatives (first iteration): with
+    ``body_fresh`` by finite differences, kept in ``body_relax``/``body_damp``; otherwise those kept, reused.
+    Returns True when a body's condensation failed (NaN)."""
     nn = rs.shape[0]
     nb = body_node.shape[0]
     i6dt = 1.0 / (6.0 * dt)
@@ -358,9 +402,13 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
         body_loads(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, mb, bdiag)
         reduced = planar or bp[b, BP_REDUCED_DOF] != 0.0
         if it == 1:
-            _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr, tmp33,
-                                  reduced)
-            _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
+            if body_fresh:
+                _rotational_stiffness(b, angs[b], chart, vs[a], w, bp, btab_n, btab, rho, g, cur_b, mb, bkc, scr,
+                                      tmp33, reduced)
+                _translational_damping(b, lam, tmp3, w, bp, btab_n, btab, rho, g, cur_b, fb, bdmat[b], scr, planar)
+                keep_body_derivatives(b, bkc, bdmat, body_relax, body_damp)
+            else:
+                reuse_body_derivatives(b, body_relax, body_damp, bkc, bdmat)
         c = body_aft_node[b]
         merged = c >= 0 and tn_nseg[c] == 0
         if merged:
@@ -1013,6 +1061,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             if abs(hist_ang[0, b, 1]) > rc_pitch:
                 rechart_body(b, hist_ang, chart, rc_lam, rc_lam0, rc_new, rc_tmp)
                 state.pred_state[PS_VALID] = 0.0       # the memory's angles are in the old chart
+                state.pred_state[PS_BODY_VALID] = 0.0  # (the kept derivatives too: fresh ones at the new attitude)
                 if counters.shape[0] > 4:
                     counters[N_RECHARTS] += 1
         if every > 0:
@@ -1029,23 +1078,27 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             dl = v_new * dt
             l_old = l0[wseg]
             l0[wseg] = l_old + dl
+        reused = nb > 0 and not body_derivatives_due(settings, state.pred_state)
         st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
         counters[N_STEPS] += 1
         counters[N_ITERATIONS] += it
         if it > counters[N_MAX_ITERATIONS]:
             counters[N_MAX_ITERATIONS] = it
-        if st != OK and state.pred_state[PS_VALID] != 0.0 and state.pred_state[PS_HIGHER] != 0.0:
-            # the adaptive predictor's higher-order start failed: the same step again from the lower orders
-            # before cutting it (at the stability map's longest steps the higher orders can start the Newton
-            # iteration where it does not converge; the state is untouched by the failed attempt)
+        if st != OK and (reused or (state.pred_state[PS_VALID] != 0.0 and state.pred_state[PS_HIGHER] != 0.0)):
+            # the adaptive predictor's higher-order start or reused body derivatives failed: the same step again
+            # from the lower orders with fresh derivatives before cutting it (at the stability map's longest
+            # steps the higher orders can start the Newton iteration where it does not converge; the state is
+            # untouched by the failed attempt)
             state.pred_state[PS_VALID] = 0.0
+            state.pred_state[PS_BODY_VALID] = 0.0
             st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
             counters[N_ITERATIONS] += it
         if st != OK:
             _copy_step_state(hist_r, hist_ang, tens_hist, cstate, s_hist_r, s_hist_ang, s_tens, s_cstate)
             # the sub-steps re-space the history: the predictor's memory does not continue it (nor, after them,
-            # the history restored to the spacing dt)
+            # the history restored to the spacing dt); the sub-steps start with fresh body derivatives
             state.pred_state[PS_VALID] = 0.0
+            state.pred_state[PS_BODY_VALID] = 0.0
             ok = False
             for cut in range(1, max_cuts + 1):
                 nsub = 2 ** cut
@@ -1094,6 +1147,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             if not ok:
                 _copy_step_state(s_hist_r, s_hist_ang, s_tens, s_cstate, hist_r, hist_ang, tens_hist, cstate)
                 state.pred_state[PS_VALID] = 0.0
+                state.pred_state[PS_BODY_VALID] = 0.0
                 if wmode > 0:
                     l0[wseg] = l_old
                 return st, k, el, md

@@ -47,12 +47,17 @@ S_RECHART_PITCH = 7         # rad (optional: shorter arrays use kernels.RECHART_
 S_PLANAR = 8                # 1: vertical-plane model (optional)
 S_NEWTON_ESTIMATE = 9       # 1: newton_stop = "estimate" (optional)
 S_PREDICTOR = 10            # 1: predictor = "adaptive" (optional; absent or 0: "quadratic")
-SETTINGS_SIZE = 11
+S_BODY_REFRESH = 11         # steps a rigid body's load derivatives serve (solver.body_derivative_refresh;
+                            # optional: absent or ≤ 1 recomputes them every step)
+SETTINGS_SIZE = 12
 
-# the Houbolt predictor's state (TimeLevels.pred_state, float64): solver.predictor = "adaptive"
-PS_VALID = 0                # 1: the memory (TimeLevels.older_*) continues the time levels
+# the Houbolt step's memory between steps (TimeLevels.pred_state, float64): the predictor's (solver.predictor =
+# "adaptive") and the bodies' reused load derivatives' (solver.body_derivative_refresh > 1)
+PS_VALID = 0                # 1: the predictor's memory (TimeLevels.older_*) continues the time levels
 PS_HIGHER = 1               # how many nodes, bodies and segments extrapolate one order higher in the next step
-PRED_STATE_SIZE = 2
+PS_BODY_VALID = 2           # 1: TimeLevels.body_relax / body_damp hold derivatives a step may reuse
+PS_BODY_AGE = 3             # steps committed since they were computed (the computing step counts as 1)
+PRED_STATE_SIZE = 4
 
 
 # ------------------------------------------------------------------------------------------------------

@@ -108,7 +108,13 @@ class TimeLevels(NamedTuple):
     cubic_r: np.ndarray         # (nn,): 1.0: the node's position extrapolated cubically (else quadratically)
     cubic_ang: np.ndarray       # (nb,): 1.0: the body's angles extrapolated cubically (else quadratically)
     quad_tens: np.ndarray       # (ns,): 1.0: the segment's tension extrapolated quadratically (else linearly)
-    pred_state: np.ndarray      # (PRED_STATE_SIZE,): memory valid, number of higher-order choices (layout.PS_*)
+    pred_state: np.ndarray      # (PRED_STATE_SIZE,): memory valid, number of higher-order choices, body
+    #                             derivatives valid and their age (layout.PS_*)
+    # each rigid body's load derivatives kept for the next steps (solver.body_derivative_refresh > 1;
+    # houbolt.iterate_coefficients): rate-only linearisations, never the converged solution
+    body_relax: np.ndarray      # (nb, 6): rotational stiffness (3) and damping (3) of the loads (BK_STIFFNESS/BK_DAMPING
+    #                             order, before the tail's stiffness is added)
+    body_damp: np.ndarray       # (nb, 3, 3): translational damping −∂F/∂v (body axes)
 
 
 class SavedStep(NamedTuple):

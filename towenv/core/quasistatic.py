@@ -46,7 +46,7 @@ class QuasiStaticScheme(TimeScheme):
             sim.hist_ang[0] = ang
             sim.tens_hist[1] = sim.tens_hist[0]
             sim.tens_hist[0] = T
-            sim.forget_predictor_history()
+            sim.forget_step_memory()
             sim.counters[N_STEPS] += 1
             sim.counters[N_ITERATIONS] += 1
             sim._static_reaction(u)

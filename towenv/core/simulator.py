@@ -45,7 +45,7 @@ class Snapshot:
     system: object = None
     l0: np.ndarray | None = None
     chart: np.ndarray | None = None     # per-body attitude chart (None: identity, snapshots of older code)
-    # the Houbolt predictor's memory (Simulator.older; None: forgotten)
+    # the Houbolt step's memory (Simulator.older: predictor, reused body derivatives; None: forgotten)
     predictor: tuple | None = None
 
 
@@ -74,6 +74,7 @@ class SolverSettings:
     planar: bool = _scene_default("planar")
     newton_stop: str = _scene_default("newton_stop")
     predictor: str = _scene_default("predictor")
+    body_derivative_refresh: int = _scene_default("body_derivative_refresh")
 
     def array(self):
         if not (0.0 <= self.rechart_pitch <= 1.2):
@@ -82,6 +83,10 @@ class SolverSettings:
             raise ValueError(f"solver.newton_stop: must be 'change' or 'estimate' (got {self.newton_stop!r})")
         if self.predictor not in ("adaptive", "quadratic"):
             raise ValueError(f"solver.predictor: must be 'adaptive' or 'quadratic' (got {self.predictor!r})")
+        if not (isinstance(self.body_derivative_refresh, (int, np.integer)) and not isinstance(
+                self.body_derivative_refresh, bool) and 1 <= self.body_derivative_refresh <= 1000):
+            raise ValueError("solver.body_derivative_refresh: must be an integer within [1, 1000] "
+                             f"(got {self.body_derivative_refresh!r})")
         a = np.empty(L.SETTINGS_SIZE)
         a[L.S_TOLERANCE] = self.tolerance
         a[L.S_RELATIVE_TOLERANCE] = self.relative_tolerance
@@ -94,6 +99,7 @@ class SolverSettings:
         a[L.S_PLANAR] = 1.0 if self.planar else 0.0
         a[L.S_NEWTON_ESTIMATE] = 1.0 if self.newton_stop == "estimate" else 0.0
         a[L.S_PREDICTOR] = 1.0 if self.predictor == "adaptive" else 0.0
+        a[L.S_BODY_REFRESH] = float(self.body_derivative_refresh)
         return a
 
 
@@ -333,7 +339,7 @@ class Simulator:
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
         self._older = (np.zeros((nn, 3)), np.zeros((nb, 3)), np.zeros(ns), np.zeros(nn), np.zeros(nb), np.zeros(ns),
-                       np.zeros(L.PRED_STATE_SIZE))
+                       np.zeros(L.PRED_STATE_SIZE), np.zeros((nb, 6)), np.zeros((nb, 3, 3)))
         self._state = TimeLevels(self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate,
                                  self.body_chart, *self._older)
         self._ws = HouboltWork.allocate(nn, ns, nb)
@@ -396,7 +402,7 @@ class Simulator:
             self.hist_r[k] = r0 - k * dt * U
             self.hist_ang[k] = ang0
         self.tens_hist[:] = T0
-        self.forget_predictor_history()
+        self.forget_step_memory()
         self.step_count = 0
         settle = float(self.settings.settle_time or 0.0)
         if settle > 0:
@@ -450,15 +456,19 @@ class Simulator:
 
     @property
     def older(self) -> tuple:
-        """The Houbolt predictor's memory (older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens,
-        pred_state), by reference: ``model.TimeLevels``' last seven arrays (solver.predictor, docs/architecture.md)."""
+        """The Houbolt step's memory between steps, by reference: ``model.TimeLevels``' last nine arrays — the
+        predictor's (older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens; solver.predictor), pred_state
+        (layout.PS_*), and the bodies' reused load derivatives (body_relax, body_damp;
+        solver.body_derivative_refresh) — docs/architecture.md."""
         return self._older
 
-    def forget_predictor_history(self) -> None:
-        """The Houbolt predictor's memory no longer continues the time levels (they were written from outside
-        the step: initial state, remesh, restore of an older snapshot, another scheme): the next steps extrapolate
-        with the lower orders until a step has been committed on top of them."""
-        self._older[-1][L.PS_VALID] = 0.0
+    def forget_step_memory(self) -> None:
+        """The Houbolt step's memory no longer continues the time levels (they were written from outside the
+        step: initial state, remesh, restore of an older snapshot, another scheme): the next steps extrapolate
+        with the lower orders until a step has been committed on top of them, and the next step computes the
+        bodies' load derivatives afresh."""
+        self._older[6][L.PS_VALID] = 0.0
+        self._older[6][L.PS_BODY_VALID] = 0.0
 
     def restore(self, snap: Snapshot) -> None:
         if snap.system is not None and snap.system is not self.system:
@@ -473,11 +483,12 @@ class Simulator:
         else:
             self.body_chart[...] = np.eye(3)
         self.tens_hist[...] = snap.tens_hist
-        if snap.predictor is not None and all(a.shape == b.shape for a, b in zip(snap.predictor, self._older)):
+        if snap.predictor is not None and len(snap.predictor) == len(self._older) and all(
+                a.shape == b.shape for a, b in zip(snap.predictor, self._older)):
             for a, b in zip(self._older, snap.predictor):
                 a[...] = b
         else:
-            self.forget_predictor_history()
+            self.forget_step_memory()
         self.top_react[...] = snap.top_react
         self.cstate[...] = snap.cstate
         self.wstate[...] = snap.wstate

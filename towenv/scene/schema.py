@@ -694,6 +694,10 @@ class Solver(_Model):
     # positions and angles, linear or quadratic tensions) that would have predicted the last step better
     # ("adaptive"), or always the lower orders ("quadratic", the predictor before 2026-12-06; docs/architecture.md)
     predictor: _choice("adaptive", "quadratic") = "adaptive"
+    # Houbolt's rigid-body load derivatives (rotational stiffness/damping, translational damping: rate-only
+    # linearisations of the Newton iteration, found by finite differences): computed afresh every this many
+    # steps and reused in between (1: every step, the kernel before this setting; docs/architecture.md)
+    body_derivative_refresh: Int(ge=1, le=1000) = 10
     # series tows: the tail's top segments in the body's clique of the tension solve ("monolithic"), or its pull
     # as a relaxed load inside the Newton loop ("relaxed", the coupling before 2026-12; docs/model-notes.md)
     series_coupling: _choice("monolithic", "relaxed") = "monolithic"

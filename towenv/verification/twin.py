@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from ..core.layout import (PRED_STATE_SIZE, PS_HIGHER, PS_VALID, S_ANGLE_TOLERANCE, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
+from ..core.layout import (PRED_STATE_SIZE, PS_BODY_AGE, PS_BODY_VALID, PS_HIGHER, PS_VALID, S_ANGLE_TOLERANCE, S_BODY_REFRESH, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
 from ..core import layout as L
 from ..core.layout import BP_AFT_TOW_POINT, BP_REDUCED_DOF, BP_TAIL_MASS
 import scipy.sparse as sp
@@ -500,8 +500,8 @@ class TwinStep:
     element: int = -1
     max_dT: float = 0.0
     body_chart: np.ndarray | None = None
-    older: tuple | None = None      # the predictor's memory (Simulator.older: older_r, older_ang, older_tens, cubic_r,
-    #                                 cubic_ang, quad_tens, pred_state)
+    older: tuple | None = None      # the step's memory (Simulator.older: older_r, older_ang, older_tens, cubic_r,
+    #                                 cubic_ang, quad_tens, pred_state, body_relax, body_damp)
 
 
 def _settings_array(settings):
@@ -749,8 +749,13 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     if older is None:
         older = (np.zeros_like(hist_r[0]), np.zeros_like(hist_ang[0]), np.zeros_like(tens_hist[0]),
                  np.zeros(hist_r.shape[1]), np.zeros(hist_ang.shape[1]), np.zeros(tens_hist.shape[1]),
-                 np.zeros(PRED_STATE_SIZE))
+                 np.zeros(PRED_STATE_SIZE), np.zeros((hist_ang.shape[1], 6)), np.zeros((hist_ang.shape[1], 3, 3)))
     older = tuple(np.array(a, float) for a in older)
+    # the bodies' load derivatives: afresh on the first iteration, or the kept ones (solver.body_derivative_refresh;
+    # houbolt.body_derivatives_due)
+    refresh = settings[S_BODY_REFRESH] if settings.shape[0] > S_BODY_REFRESH else 1.0
+    body_fresh = refresh <= 1.0 or older[6][PS_BODY_VALID] == 0.0 or older[6][PS_BODY_AGE] >= refresh
+    kept_relax, kept_damp = older[7].copy(), older[8].copy()
     valid = older[6][PS_VALID] != 0.0
     up_r = (older[3] != 0.0) & valid         # one order higher, per node / body / segment
     up_ang = (older[4] != 0.0) & valid
@@ -801,13 +806,16 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             z_centroid = rs[a, 2] + (lam.T @ P["r_B"])[2]
             cur = current_np(z_centroid, sys.cur_z, sys.cur_v)
             F, M, _ = body_loads_np(sys, b, lam, lam @ vs[a], w, cur)
-            if it == 1:
+            if it == 1 and body_fresh:
                 relax[b] = rotational_stiffness_np(sys, b, angs[b], vs[a], w, cur, M, chart_b=chart[b])
                 bdamp[b] = translational_damping_np(sys, b, lam, lam @ vs[a], w, cur, F)
                 if reduced[b]:
                     relax[b, [0, 2, 3, 5]] = 0.0       # roll and yaw are held: not needed
                 if planar:
                     bdamp[b][:, 1] = 0.0                 # no lateral velocity
+                kept_relax[b], kept_damp[b] = relax[b], bdamp[b]
+            elif it == 1:
+                relax[b], bdamp[b] = kept_relax[b], kept_damp[b]
             c = sys.body_aft_node[b]
             if c >= 0:
                 tail = node_reaction_np(sys, c, rs, hist_r, dt, seg.tang, tens, mnode, fnode)
@@ -981,8 +989,13 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     new_hist_r = np.stack([rs, hist_r[0], hist_r[1]])
     new_hist_ang = np.stack([angs, hist_ang[0], hist_ang[1]])
     new_tens = np.stack([tens, tens_hist[0]])
+    body_state = older[6].copy()
     if adaptive:
         older = choose_predictor_np(it, rs, angs, tens, hist_r, hist_ang, tens_hist, older)
+    pred_state = older[6].copy()
+    pred_state[PS_BODY_VALID] = 1.0 if body_fresh else body_state[PS_BODY_VALID]
+    pred_state[PS_BODY_AGE] = 1.0 if body_fresh else body_state[PS_BODY_AGE] + 1.0
+    older = older[:6] + (pred_state, kept_relax, kept_damp)
     return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd, chart,
                     older)
 
