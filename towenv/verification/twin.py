@@ -704,7 +704,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
        Λᵀ f_eff (model.md 3.4);
     2. the linearisation L = (11Δt/12) B + ½Δt² K_g (implicit drag, 5.2 — at a rigid body's node B also
        holds Λᵀ D Λ with the body's full damping D = −∂F/∂v, :func:`translational_damping_np`, evaluated at
-       the first iterate — plus the node's own string stiffness K_g, :func:`geometric_stiffness_np`),
+       the first iterate, or kept from an earlier step as the kernel keeps it (``solver.body_derivative_refresh``:
+       ``older[7:]``, refreshed when ``houbolt.body_derivatives_due`` says so) — plus the node's own string
+       stiffness K_g, :func:`geometric_stiffness_np`),
        M̃ = M + L, and the node-local affine map
        r_a(T) = M̃⁻¹[M (2.5r^t − 2r^{t−1} + 0.5r^{t−2}) + L r* + ½Δt² (F_o + Σ σ T t)];
     3. residuals g = ℓ − l(1 + T/EA) at r(T), the tension matrix K = −J (coefficient tangents), slack
@@ -712,7 +714,7 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     4. positions at the new tensions; body angular accelerations ω̇ = A_rr⁻¹(M − A_rt Λ r̈) mapped to Euler
        accelerations, Houbolt (4.10) on the Euler angles, the update relaxed by the diagonal factor
        1 + (½Δt² k_θ + (11Δt/12) c_ω)/A_rr,ii (:func:`rotational_stiffness_np`, evaluated at the first
-       iterate); aft nodes re-placed;
+       iterate or kept with D above); aft nodes re-placed;
     5. converged when max|δT| ≤ tol_abs + tol_rel·max(T) and max|Δangle| ≤ angle_tol; with
        ``solver.newton_stop = "estimate"`` also, from the second iteration, when each criterion holds for
        its estimated remaining error |δ_k|ρ/(1 − ρ), ρ = |δ_k|/|δ_{k−1}| ≤ ½, and no segment is slack.
