@@ -38,3 +38,25 @@ def load_script(name: str):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def kernel_and_twin_step(sim, state, rel=1e-8):
+    """One Houbolt step of the compiled kernel on ``sim`` (``houbolt_step_entry`` on its arrays, in place) and of the
+    numpy twin from ``state`` (``sim`` itself, or the previous :class:`~towenv.verification.twin.TwinStep`), to the
+    same new tow point. Asserts that both converged, in the same number of iterations, to the same time levels
+    (``hist_r``, ``tens_hist``, ``hist_ang`` within ``rel`` of their size). Returns (twin step, iterations, tow
+    point) — the tests of the Newton stop, the predictor and the reused body derivatives chain it step by step."""
+    import numpy as np
+
+    from towenv.core import kernels as K
+    from towenv.verification import twin
+    top = sim.path.position(np.array([sim.t + sim.dt]))[0]
+    new = twin.houbolt_step_np(state, sim.dt, top)
+    st, it, _, _ = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws, sim.comp)
+    sim.step_count += 1
+    assert st == K.OK and new.status == twin.OK, (st, new.status)
+    assert it == new.iterations, (it, new.iterations)
+    for key in ("hist_r", "tens_hist", "hist_ang"):
+        a, b = getattr(new, key), getattr(sim, key)
+        assert np.max(np.abs(a - b)) <= rel * max(np.max(np.abs(b)), 1e-30), key
+    return new, it, top

@@ -20,11 +20,10 @@ import dataclasses
 import numpy as np
 import pytest
 
+from helpers import kernel_and_twin_step
 from towenv import SceneError
-from towenv.core import kernels as K
 from towenv.core.layout import PS_BODY_AGE, PS_BODY_VALID
 from towenv.core.simulator import Simulator, load
-from towenv.verification import twin
 
 SEA = {"sea": {"code": 4, "convention": "coastal", "spectrum": "jonswap", "heading_deg": 165.0, "seed": 13},
        "vessel.model": "coastal_survey", "vessel.excitation": None, "vessel.speed": 3.0}
@@ -49,17 +48,8 @@ def test_kernel_and_twin_reuse_on_the_same_steps():
     state = sim
     ages = []
     for k in range(12):
-        top = sim.path.position(np.array([sim.t + sim.dt]))[0]
         kept = [np.array(a) for a in sim.older[7:]]
-        state = twin.houbolt_step_np(state, sim.dt, top)
-        st, it, el, md = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws,
-                                              sim.comp)
-        sim.step_count += 1
-        assert st == K.OK and state.status == twin.OK, k
-        assert it == state.iterations, k
-        for key in ("hist_r", "tens_hist", "hist_ang"):
-            a, b = getattr(state, key), getattr(sim, key)
-            assert np.max(np.abs(a - b)) <= 1e-8 * max(np.max(np.abs(b)), 1e-30), (k, key)
+        state, _, _ = kernel_and_twin_step(sim, state)
         assert np.array_equal(state.older[6], sim.older[6]), k
         for a, b in zip(state.older[7:], sim.older[7:]):
             assert np.max(np.abs(a - b)) <= 1e-6 * max(np.max(np.abs(b)), 1e-30), k

@@ -15,10 +15,9 @@ value is refused naming the field.
 import numpy as np
 import pytest
 
-from towenv.core import kernels as K
+from helpers import kernel_and_twin_step
 from towenv.core.layout import PS_HIGHER, PS_VALID
 from towenv.core.simulator import Simulator, load
-from towenv.verification import twin
 
 SEA = {"sea": {"code": 4, "convention": "coastal", "spectrum": "jonswap", "heading_deg": 165.0, "seed": 13},
        "vessel.model": "coastal_survey", "vessel.excitation": None, "vessel.speed": 3.0}
@@ -43,16 +42,7 @@ def test_adaptive_predictor_kernel_matches_twin():
     state = sim
     higher = lower = 0
     for k in range(30):
-        top = sim.path.position(np.array([sim.t + sim.dt]))[0]
-        state = twin.houbolt_step_np(state, sim.dt, top)
-        st, it, el, md = K.houbolt_step_entry(sim.dt, top, *sim._args, sim.settings.array(), sim._state, sim._ws,
-                                              sim.comp)
-        sim.step_count += 1
-        assert st == K.OK and state.status == twin.OK, k
-        assert it == state.iterations, k
-        for key in ("hist_r", "tens_hist", "hist_ang"):
-            a, b = getattr(state, key), getattr(sim, key)
-            assert np.max(np.abs(a - b)) <= 1e-8 * max(np.max(np.abs(b)), 1e-30), (k, key)
+        state, _, _ = kernel_and_twin_step(sim, state)
         for a, b in zip(_memory(state)[3:7], _memory(sim)[3:7]):
             assert np.array_equal(a, b), k
         for a, b in zip(_memory(state)[7:], _memory(sim)[7:]):       # the bodies' kept finite-difference derivatives
