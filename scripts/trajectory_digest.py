@@ -10,10 +10,18 @@ levels, body angles, tensions, tow-point reaction, solver counters) and the obse
     python scripts/trajectory_digest.py --compare /tmp/base.npz /tmp/new.npz   # exit 1 if any array differs
 
 (numba compiles for the host CPU: files from different machines may differ in the last bits.)
+
+``--solver KEY=VALUE`` (repeatable) sets a solver setting for every scene and environment (``make_simulator``'s
+keywords, the environments' ``sim_overrides``), e.g. the settings a change added, at the values that reproduce the
+code before it — the adaptive predictor and the reused body derivatives of 2026-12-06 against 314f390:
+
+    PYTHONPATH=../314f390 python scripts/trajectory_digest.py /tmp/base.npz
+    python scripts/trajectory_digest.py /tmp/new.npz --solver predictor=quadratic --solver body_derivative_refresh=1
 """
 from __future__ import annotations
 
 import argparse
+import ast
 import sys
 
 import numpy as np
@@ -27,11 +35,12 @@ ENVS = ("towenv/WinchPayout-v0", "towenv/CompensatorGains-v0")
 ENV_STEPS = 1500
 
 
-def record(path):
+def record(path, solver=None):
     import towenv
+    solver = dict(solver or {})
     out = {}
     for scene, dt, seconds in SCENES:
-        sim = towenv.make_simulator(scene, dt=dt) if dt else towenv.make_simulator(scene)
+        sim = towenv.make_simulator(scene, dt=dt, **solver) if dt else towenv.make_simulator(scene, **solver)
         sim.advance(seconds)
         for key in ("hist_r", "hist_ang", "tens_hist", "top_react", "counters"):
             out[f"{scene}::{key}"] = np.array(getattr(sim, key))
@@ -39,7 +48,7 @@ def record(path):
     import gymnasium as gym
     import towenv.envs  # noqa: F401  (registers the ids)
     for env_id in ENVS:
-        env = gym.make(env_id).unwrapped
+        env = gym.make(env_id, **({"sim_overrides": solver} if solver else {})).unwrapped
         rng = np.random.default_rng(3)
         obs, _ = env.reset(seed=7)
         observations, rewards = [obs], []
@@ -80,12 +89,23 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out", nargs="?", help="the .npz to write")
     ap.add_argument("--compare", nargs=2, metavar=("A", "B"), help="compare two recorded files instead")
+    ap.add_argument("--solver", action="append", default=[], metavar="KEY=VALUE",
+                    help="a solver setting for every run (repeatable), e.g. body_derivative_refresh=1")
     a = ap.parse_args(argv)
+    solver = {}
+    for item in a.solver:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            ap.error(f"--solver: expected KEY=VALUE (got {item!r})")
+        try:
+            solver[key] = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            solver[key] = value                     # a bare word: a string setting (predictor=quadratic)
     if a.compare:
         return compare(*a.compare)
     if not a.out:
         ap.error("give the .npz to write, or --compare A B")
-    record(a.out)
+    record(a.out, solver)
     return 0
 
 
