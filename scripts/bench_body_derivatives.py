@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from bench_predictor import SCENES  # noqa: E402  (same cases)
+from bench_predictor import ENV_CASES, SCENES, final_state_gap  # noqa: E402  (same cases)
 
 
 def _sim(name, ov, dt, refresh):
@@ -113,15 +113,11 @@ def main(argv=None):
             cells.append(f"{t:6.2f} {i:5.3f}" + (f" ({t / t1:.3f}/{i / i1:.3f})" if n != 1 else " " * 14))
         print(f"{name + f' (dt {dt:g} s)':34s} " + "  ".join(cells), flush=True)
         for n in settings[1:]:
-            s = r[n][2]
-            dang = float(np.max(np.abs(s1.hist_ang[0] - s.hist_ang[0]))) if s.hist_ang.shape[1] else 0.0
-            print(f"{'':34s} N={n} final state vs N=1: max |dr| {np.max(np.abs(s1.hist_r[0] - s.hist_r[0])):.2g} m, "
-                  f"|dT| {np.max(np.abs(s1.tens_hist[0] - s.tens_hist[0])):.2g} N, |d angle| {dang:.2g} rad; step "
-                  f"cuts {s1.stats['step_cuts']} / {s.stats['step_cuts']}")
+            print(f"{'':34s} N={n} final state vs N=1, max |dr| (m), |dT| (N), |d angle| (rad): "
+                  f"{final_state_gap(s1, r[n][2])}")
     if a.no_envs:
         return
-    for env_id, policy in (("towenv/WinchPayout-v0", "along_cable"), ("towenv/WinchPayout-v0", "random"),
-                           ("towenv/CompensatorGains-v0", "skyhook"), ("towenv/CompensatorGains-v0", "random")):
+    for env_id, policy in ENV_CASES:
         r = _env_case(env_id, policy, settings, 1500, 25)
         t1, i1 = r[1]
         cells = [f"{t:6.2f} {i:5.3f}" + (f" ({t / t1:.3f}/{i / i1:.3f})" if n != 1 else " " * 14)

@@ -23,6 +23,17 @@ SCENES = [("two_part_tow_1", {}, 0.05), ("two_part_tow_1 in SS4", SEA, 0.05), ("
           ("two_part_coastal_ss4", {}, 0.05), ("series_multitow", {}, 0.05), ("hover_deep_tow", {}, 0.05)]
 
 
+ENV_CASES = (("towenv/WinchPayout-v0", "along_cable"), ("towenv/WinchPayout-v0", "random"),
+             ("towenv/CompensatorGains-v0", "skyhook"), ("towenv/CompensatorGains-v0", "random"))
+
+
+def final_state_gap(a, b):
+    """"max |dr| (m), |dT| (N), |d angle| (rad)" between two simulators' final time levels, and their step cuts."""
+    dang = float(np.max(np.abs(a.hist_ang[0] - b.hist_ang[0]))) if a.hist_ang.shape[1] else 0.0
+    return (f"{np.max(np.abs(a.hist_r[0] - b.hist_r[0])):.2g}, {np.max(np.abs(a.tens_hist[0] - b.tens_hist[0])):.2g}, "
+            f"{dang:.2g}  (step cuts {a.stats['step_cuts']} / {b.stats['step_cuts']})")
+
+
 def _scene_run(name, ov, dt, predictor, seconds):
     from towenv.core.simulator import Simulator, load
     sim = Simulator(load(name.split()[0]).with_overrides({**ov, "solver.dt": dt, "solver.predictor": predictor}))
@@ -72,14 +83,10 @@ def main(argv=None):
         q = _scene_run(name, ov, dt, "quadratic", a.seconds)
         p = _scene_run(name, ov, dt, "adaptive", a.seconds)
         iq, ip = q.stats["mean_iterations"], p.stats["mean_iterations"]
-        dang = float(np.max(np.abs(q.hist_ang[0] - p.hist_ang[0]))) if q.hist_ang.shape[1] else 0.0
-        print(f"{name + f' (dt {dt:g} s)':34s} {iq:10.3f} {ip:10.3f} {ip / iq:6.3f}   "
-              f"{np.max(np.abs(q.hist_r[0] - p.hist_r[0])):.2g}, {np.max(np.abs(q.tens_hist[0] - p.tens_hist[0])):.2g}, "
-              f"{dang:.2g}  (step cuts {q.stats['step_cuts']} / {p.stats['step_cuts']})")
+        print(f"{name + f' (dt {dt:g} s)':34s} {iq:10.3f} {ip:10.3f} {ip / iq:6.3f}   {final_state_gap(q, p)}")
     if a.no_envs:
         return
-    for env_id, policy in (("towenv/WinchPayout-v0", "along_cable"), ("towenv/WinchPayout-v0", "random"),
-                           ("towenv/CompensatorGains-v0", "skyhook"), ("towenv/CompensatorGains-v0", "random")):
+    for env_id, policy in ENV_CASES:
         iq = _env_run(env_id, policy, "quadratic")
         ip = _env_run(env_id, policy, "adaptive")
         print(f"{env_id.split('/')[1] + ', ' + policy:34s} {iq:10.3f} {ip:10.3f} {ip / iq:6.3f}")
