@@ -17,6 +17,9 @@ code before it — the adaptive predictor and the reused body derivatives of 202
 
     PYTHONPATH=../314f390 python scripts/trajectory_digest.py /tmp/base.npz
     python scripts/trajectory_digest.py /tmp/new.npz --solver predictor=quadratic --solver body_derivative_refresh=1
+
+(and ``--solver cable_jacobian_refresh=1`` for the reused node Newton matrices, also of 2026-12-06, against 98772f2;
+with all three the head reproduces 314f390).
 """
 from __future__ import annotations
 

@@ -47,6 +47,13 @@ its first 26 observations within 8.7e-4 — a run on the edge of failure at Δt 
 tolerance-level difference moves the step that fails); largest other differences 5.4e-4 in observations (of ~11,
 the remeshing winch case), 1.2e-3 in reward components (of ~99), and the vector winch case's step 11, copy 1, whose
 slack penalty moved back by 0.1 (the threshold case above).
+Regenerated a seventh time (2026-12-06, issue 15) for the reused free-node Newton matrices
+(``solver.cable_jacobian_refresh``, default 10 since; a modified Newton, stopping elsewhere within its tolerances;
+with 1 the kernel is the one before, bit for bit: ``scripts/trajectory_digest.py``, 54 arrays, ``znver3`` host).
+Against the previous file: info texts, flags and episode lengths identical (the numerical-failure case fails at the
+same step; the compensator cases build the matrices every step and are unchanged); largest differences 4.7e-3 in
+observations (of ~11, the remeshing winch case), 3.6e-2 in reward components (of ~99, same case), and the vector
+winch case's step 11, copy 1, whose slack penalty moved by 0.1 again (the threshold case above).
 
 As for ``houbolt_reference.npz``, numba compiles for the host CPU: the file records :func:`fingerprint`
 and the comparison is bit for bit when it matches, to round-off otherwise.

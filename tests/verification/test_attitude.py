@@ -57,6 +57,9 @@ def test_no_rechart_runs_are_bit_identical_to_the_euler_angle_kernel(scene):
     # and the bodies' derivatives computed every step, as then (solver.body_derivative_refresh = 1; the default 10
     # reuses them and converges to the same solution within the tolerance: tests/unit/test_body_derivatives.py)
     overrides = dict(overrides, **{"solver.body_derivative_refresh": 1})
+    # and the free nodes' Newton matrices built at every iteration (solver.cable_jacobian_refresh = 1; the default 10
+    # reuses them, a modified Newton, converging within the tolerance: tests/unit/test_cable_jacobian.py)
+    overrides = dict(overrides, **{"solver.cable_jacobian_refresh": 1})
     sim = ref.run(scene, overrides, steps)
     assert sim.stats["recharts"] == 0
     assert np.all(sim.body_chart == np.eye(3))

@@ -121,7 +121,8 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
     drag linearisation ``bmat[s, e] = −∂drag[s, e]/∂v`` is exact inside the node-local solve (the
     Newton iteration then converges in a few sweeps even when drag dominates inertia).
     ``madd[s]``: added-mass tensor of the whole segment. Wet weight and dry mass are added in
-    ``node_assembly``.
+    ``node_assembly``. An empty ``bmat`` (no rows): the drag Jacobians are not wanted (the Houbolt step reusing
+    its nodes' Newton matrices, solver.cable_jacobian_refresh).
     """
     nseg = seg_lo.shape[0]
     for s in range(nseg):
@@ -156,7 +157,8 @@ def segment_loads(r, v, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, 
             drag[s, e, 0] = d0
             drag[s, e, 1] = d1
             drag[s, e, 2] = d2
-            morison_jacobian(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt, bmat, s, e)
+            if bmat.shape[0] > 0:
+                morison_jacobian(vt_mag, vn0, vn1, vn2, vn_abs, t0, t1, t2, kn, kt, bmat, s, e)
         area = 0.25 * math.pi * diam[s] * diam[s]
         amt = cat[s] * rho * area * l0[s]
         amn = can[s] * rho * area * l0[s]
@@ -176,6 +178,7 @@ def node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu,
     mass + added mass (isotropic), wet weight and isotropic quadratic drag ``-½ρ CdA |v_r| v_r``.
     """
     nn = node_kind.shape[0]
+    jac = bmat.shape[0] > 0     # (empty: no drag Jacobians wanted, segment_loads; bnode then holds the point bodies')
     for a in range(nn):
         for i in range(3):
             fnode[a, i] = 0.0
@@ -192,7 +195,8 @@ def node_assembly(r, v, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu,
                 fnode[a, i] += 0.5 * drag[s, e, i]
                 for j in range(3):
                     mnode[a, i, j] += 0.5 * madd[s, i, j]
-                    bnode[a, i, j] += 0.5 * bmat[s, e, i, j]
+                    if jac:
+                        bnode[a, i, j] += 0.5 * bmat[s, e, i, j]
             fnode[a, 2] -= wet
         # point body
         if pb_mass[a] > 0.0:

@@ -13,7 +13,7 @@ from .layout import (BK_DAMPING, BK_INERTIA, BK_STIFFNESS, BP_AFT_TOW_POINT, BP_
                      C_B, C_K, C_NODE, C_RATE, C_SHIP, C_SMAX, C_SMIN, C_TAU, C_TRIAL, FAIL_ANGLE, FAIL_NAN, FAIL_NEWTON,
                      FAIL_STRETCH, FREE, NEED_REMESH, N_ITERATIONS, N_MAX_ITERATIONS, N_RECHARTS, N_STEPS,
                      N_STEP_CUTS, OK, PITCH_LIMIT, RECHART_PITCH, RETRY_CONTACT, S_ANGLE_TOLERANCE, S_AS_PUBLISHED,
-                     PS_BODY_AGE, PS_BODY_VALID, PS_HIGHER, PS_VALID, S_BODY_REFRESH, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR,
+                     PS_BODY_AGE, PS_BODY_VALID, CABLE_REUSE_EXTRA_ITERATIONS, PS_CABLE_AGE, PS_CABLE_ITERATIONS, PS_CABLE_VALID, PS_HIGHER, PS_VALID, S_BODY_REFRESH, S_CABLE_REFRESH, S_MAX_ITERATIONS, S_MAX_STEP_CUTS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR,
                      S_PREDICTOR, S_RECHART_PITCH,
                      S_RELATIVE_TOLERANCE, S_TOLERANCE, WS_LEN, WS_PAID, WS_V, W_LNOM, W_MODE, W_SEG)
 from .actuators import _compensator_node, _end_stop_force, _winch_speed
@@ -76,6 +76,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     older_r, older_ang, older_tens = state.older_r, state.older_ang, state.older_tens
     cubic_r, cubic_ang, quad_tens, pred_state = state.cubic_r, state.cubic_ang, state.quad_tens, state.pred_state
     body_relax, body_damp = state.body_relax, state.body_damp
+    node_matrix, node_inverse = state.node_matrix, state.node_inverse
     # the bodies' load derivatives: computed on this step's first iteration, or those of an earlier step reused
     # (solver.body_derivative_refresh)
     body_fresh = body_derivatives_due(settings, pred_state)
@@ -100,6 +101,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
 
     # series tows only: the body–tail relaxation below is skipped entirely without an aft tow point
     any_aft, any_merged = series_flags(body_aft_node, tn_nseg)
+    # the free nodes' Newton matrices: built at every iteration of this step, or those of an earlier step reused
+    # (solver.cable_jacobian_refresh)
+    cable_fresh = cable_jacobian_due(settings, pred_state, cmode, any_aft)
     status = FAIL_NEWTON
     elem = -1
     it = 0
@@ -112,14 +116,14 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
                                    cur_z, cur_v, chart, rs, vs, angs, tang, stretched, drag, bmat, madd, mnode, bnode,
                                    fnode, tens, dang, blam, omg, tmp3, cur_b, fb, mb, bdiag, bkc, scr, tmp33, bdmat,
                                    react, att, atr, arr, arrinv, hvec, tmp33b, bX, by, tn_nseg, gaft, haft,
-                                   body_fresh, body_relax, body_damp)
+                                   body_fresh, body_relax, body_damp, cable_fresh, ws.no_bmat)
         if bad:
             return FAIL_NAN, it, -1, 0.0
         # --- node-local solve: r_a = A_a + Σ σ T q_a,k
         a_bad = node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind,
                                  node_nseg, node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens,
                                  mnode, bnode, fnode, acon, qvec, att, tmp33, tmp33b, hvec, tmp3, tn_nseg, tn_segs,
-                                 haft)
+                                 haft, cable_fresh, node_matrix, node_inverse)
         if a_bad >= 0:
             return FAIL_NAN, it, a_bad, 0.0
         if any_merged:
@@ -163,6 +167,9 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
             if ok_t and ok_a:
                 status = OK
                 break
+        if not cable_fresh and it >= pred_state[PS_CABLE_ITERATIONS] + CABLE_REUSE_EXTRA_ITERATIONS:
+            # the kept matrices converge too slowly here: give up, advance retries the step with fresh ones
+            break
         prev_d = maxd
         prev_a = dang_max
     if status != OK:
@@ -184,6 +191,15 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
         pred_state[PS_BODY_AGE] = 1.0
     else:
         pred_state[PS_BODY_AGE] += 1.0
+    if cable_fresh:
+        pred_state[PS_CABLE_VALID] = 1.0
+        pred_state[PS_CABLE_AGE] = 1.0
+        pred_state[PS_CABLE_ITERATIONS] = it
+    else:
+        pred_state[PS_CABLE_AGE] += 1.0
+        if it > pred_state[PS_CABLE_ITERATIONS]:
+            # the kept matrices slowed the iteration down: the next step builds them afresh
+            pred_state[PS_CABLE_VALID] = 0.0
     return OK, it, -1, maxd
 
 
@@ -217,6 +233,19 @@ def body_derivatives_due(settings, pred_state):
     without them, a re-chart, a failed step) and when they have served ``refresh`` steps."""
     refresh = settings[S_BODY_REFRESH] if settings.shape[0] > S_BODY_REFRESH else 1.0
     return refresh <= 1.0 or pred_state[PS_BODY_VALID] == 0.0 or pred_state[PS_BODY_AGE] >= refresh
+
+
+@njit_internal
+def cable_jacobian_due(settings, pred_state, cmode, any_aft):
+    """Whether this step builds the free nodes' Newton matrices M̃ = M + (11Δt/12) B + ½Δt² K_g and their inverses
+    at every iteration (:func:`node_local_solve`) rather than reuse those kept in ``TimeLevels.node_matrix`` /
+    ``node_inverse`` (a modified Newton): always with ``solver.cable_jacobian_refresh`` ≤ 1 (or a settings array
+    without it), with a heave compensator (its sheave node's own law reads the node's drag Jacobian) or a series
+    tow's aft tow point (its coupling terms are built with the matrix), when none are kept (``PS_CABLE_VALID`` = 0:
+    initial state, a restore without them, a remesh, a failed step) and when they have served ``refresh`` steps."""
+    refresh = settings[S_CABLE_REFRESH] if settings.shape[0] > S_CABLE_REFRESH else 1.0
+    return (refresh <= 1.0 or cmode != 0 or any_aft or pred_state[PS_CABLE_VALID] == 0.0
+            or pred_state[PS_CABLE_AGE] >= refresh)
 
 
 @njit_internal
@@ -362,7 +391,7 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
                          bp, btab_n, btab, pb_mass, pb_vol, pb_cda, pb_ca, rho, g, cur_z, cur_v, chart, rs, vs, angs,
                          tang, stretched, drag, bmat, madd, mnode, bnode, fnode, tens, dang, blam, omg, tmp3, cur_b,
                          fb, mb, bdiag, bkc, scr, tmp33, bdmat, react, att, atr, arr, arrinv, hvec, tmp33b, bX, by,
-                         tn_nseg, gaft, haft, body_fresh, body_relax, body_damp):
+                         tn_nseg, gaft, haft, body_fresh, body_relax, body_damp, cable_fresh, no_bmat):
     """Loads and their linearisations at the current iterate ``rs`` (Newton iteration ``it``): node velocities
     (Houbolt, relative to the orbital flow), cable segment loads, node assembly, the rigid bodies' loads
     condensed onto their tow-point nodes (their rotational stiffness and damping on the first iteration), and
@@ -371,6 +400,8 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
     solve through H_b and the rotation through G_b (``gaft``, ``haft``: :func:`aft_transfer`) — and only the aft
     node's own loads and inertia are a load on the body. The bodies' load derivatives (first iteration): with
     ``body_fresh`` by finite differences, kept in ``body_relax``/``body_damp``; otherwise those kept, reused.
+    The cable drag Jacobians (``bmat``, assembled into ``bnode``) only when the nodes' Newton matrices are built
+    (``cable_fresh``; an empty ``bmat`` tells :func:`segment_loads` and :func:`node_assembly` to skip them).
     Returns True when a body's condensation failed (NaN)."""
     nn = rs.shape[0]
     nb = body_node.shape[0]
@@ -382,9 +413,10 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
             # the current is subtracted where each load is evaluated
             vs[a, i] = (11.0 * rs[a, i] - 18.0 * r_t[a, i] + 9.0 * r_tm1[a, i] - 2.0 * r_tm2[a, i]) * i6dt \
                 - flow[a, i]
+    jac = bmat if cable_fresh else no_bmat
     segment_loads(rs, vs, seg_lo, seg_up, l0, diam, mu, cn, ct, can, cat, rho, g, cur_z, cur_v,
-                  tang, stretched, drag, bmat, madd)
-    node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, bmat, madd,
+                  tang, stretched, drag, jac, madd)
+    node_assembly(rs, vs, node_kind, node_nseg, node_segs, node_sgn, l0, diam, mu, rho, g, drag, jac, madd,
                   pb_mass, pb_vol, pb_cda, pb_ca, cur_z, cur_v, mnode, bnode, fnode)
     for b in range(nb):
         a = body_node[b]
@@ -468,12 +500,16 @@ def iterate_coefficients(it, dt, planar, any_aft, r_t, r_tm1, r_tm2, hist_ang, f
 @njit_internal
 def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm2, rs, node_kind, node_nseg,
                      node_segs, body_node, body_aft_node, bp, l0, ea, tang, stretched, tens, mnode, bnode, fnode,
-                     acon, qvec, att, tmp33, tmp33b, hvec, tmp3, tn_nseg, tn_segs, haft):
+                     acon, qvec, att, tmp33, tmp33b, hvec, tmp3, tn_nseg, tn_segs, haft, cable_fresh, node_matrix,
+                     node_inverse):
     """Every free node's position as a function of its segments' tensions, r_a = A_a + Σ σ T q_a,k (acon,
     qvec; over the node's list in the tension tree), from the node's 3×3 system at the current iterate; the
     compensator's sheave node by its own law. A body's tow-point node with a merged aft tow point (monolithic
-    series coupling) also carries the tail segments: q = ½Δt² M̃⁻¹ H_b t. Returns the index of a node whose
-    matrix is singular, or −1."""
+    series coupling) also carries the tail segments: q = ½Δt² M̃⁻¹ H_b t. With ``cable_fresh`` each node's M̃ is
+    built at the iterate and inverted, and both are kept in ``node_matrix``/``node_inverse``; otherwise the kept
+    ones serve (a modified Newton: M̃_kept r = M h + (M̃_kept − M) r* + ½Δt² F, whose fixed point is the same
+    M r = M h + ½Δt² F as with the matrix of the iterate — only the rate changes). Returns the index of a node
+    whose matrix is singular, or −1."""
     nn = rs.shape[0]
     nb = body_node.shape[0]
     c11 = 11.0 * dt / 12.0
@@ -485,68 +521,79 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
             continue
         if node_kind[a] != FREE:
             continue
-        # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
-        # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
-        # both sides, so they change the convergence rate only, never the converged solution.
-        # (K_g accumulates in att segment by segment: per entry the same sum in the same order as a sum per
-        # entry, with T/ℓ divided once per segment instead of once per entry)
-        for i in range(3):
-            for j in range(3):
-                att[i, j] = 0.0
-        for k in range(node_nseg[a]):
-            sk = node_segs[a, k]
-            if stretched[sk] > 0.0:
-                t_over_l = tens[sk] / stretched[sk]
-                for i in range(3):
-                    for j in range(3):
-                        att[i, j] += t_over_l * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
-        for i in range(3):
-            for j in range(3):
-                att[i, j] = c11 * bnode[a, i, j] + hdt2 * att[i, j]
-                tmp33[i, j] = mnode[a, i, j] + att[i, j]
-        # a body towing a tail from its aft tow point. Relaxed coupling: the tail's pull is a load on the body
-        # inside the Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ
-        # + T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness).
-        # Monolithic coupling: the pull is in the tension solve, the aft node's inertia and drag in the body's
-        # condensation (body_dynamics._condense); the tail segments' string stiffness, which moves with the tow
-        # point, enters both sides through H (again the rate only)
         hb = -1
-        for b in range(nb if any_aft else 0):
-            c = body_aft_node[b]
-            if body_node[b] != a or c < 0:
-                continue
-            if tn_nseg[c] == 0:
-                hb = b
-                for i in range(3):
-                    for j in range(3):
-                        tmp33b[i, j] = 0.0
+        if cable_fresh:
+            # M̃ = M + (11Δt/12) B + ½Δt² K_g: implicit drag and the node's own geometric (string)
+            # stiffness K_g = Σ (T/ℓ)(1 − t tᵀ). Both are linearisations about the iterate r*, added on
+            # both sides, so they change the convergence rate only, never the converged solution.
+            # (K_g accumulates in att segment by segment: per entry the same sum in the same order as a sum per
+            # entry, with T/ℓ divided once per segment instead of once per entry)
+            for i in range(3):
+                for j in range(3):
+                    att[i, j] = 0.0
+            for k in range(node_nseg[a]):
+                sk = node_segs[a, k]
+                if stretched[sk] > 0.0:
+                    t_over_l = tens[sk] / stretched[sk]
+                    for i in range(3):
+                        for j in range(3):
+                            att[i, j] += t_over_l * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+            for i in range(3):
+                for j in range(3):
+                    att[i, j] = c11 * bnode[a, i, j] + hdt2 * att[i, j]
+                    tmp33[i, j] = mnode[a, i, j] + att[i, j]
+            # a body towing a tail from its aft tow point. Relaxed coupling: the tail's pull is a load on the body
+            # inside the Newton loop (block Gauss–Seidel); its stiffness against the body's motion, ½Δt²(k_ax t tᵀ
+            # + T/ℓ (1 − t tᵀ)), is added to both sides like K_g above (rate only, aft_segment_stiffness).
+            # Monolithic coupling: the pull is in the tension solve, the aft node's inertia and drag in the body's
+            # condensation (body_dynamics._condense); the tail segments' string stiffness, which moves with the tow
+            # point, enters both sides through H (again the rate only)
+            for b in range(nb if any_aft else 0):
+                c = body_aft_node[b]
+                if body_node[b] != a or c < 0:
+                    continue
+                if tn_nseg[c] == 0:
+                    hb = b
+                    for i in range(3):
+                        for j in range(3):
+                            tmp33b[i, j] = 0.0
+                    for k in range(node_nseg[c]):
+                        sk = node_segs[c, k]
+                        kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
+                        if kgeo == 0.0:
+                            continue
+                        for i in range(3):
+                            for j in range(3):
+                                tmp33b[i, j] += hdt2 * kgeo * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
+                    for i in range(3):
+                        for j in range(3):
+                            add = haft[b, i, 0] * tmp33b[0, j] + haft[b, i, 1] * tmp33b[1, j] + haft[b, i, 2] * tmp33b[2, j]
+                            att[i, j] += add
+                            tmp33[i, j] += add
+                    continue
                 for k in range(node_nseg[c]):
                     sk = node_segs[c, k]
                     kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
-                    if kgeo == 0.0:
+                    if kax == 0.0 and kgeo == 0.0:
                         continue
                     for i in range(3):
                         for j in range(3):
-                            tmp33b[i, j] += hdt2 * kgeo * ((1.0 if i == j else 0.0) - tang[sk, i] * tang[sk, j])
-                for i in range(3):
-                    for j in range(3):
-                        add = haft[b, i, 0] * tmp33b[0, j] + haft[b, i, 1] * tmp33b[1, j] + haft[b, i, 2] * tmp33b[2, j]
-                        att[i, j] += add
-                        tmp33[i, j] += add
-                continue
-            for k in range(node_nseg[c]):
-                sk = node_segs[c, k]
-                kax, kgeo = aft_segment_stiffness(sk, bp[b, BP_TAIL_MASS], stretched, tens, l0, ea, hdt2)
-                if kax == 0.0 and kgeo == 0.0:
-                    continue
-                for i in range(3):
-                    for j in range(3):
-                        tt = tang[sk, i] * tang[sk, j]
-                        add = hdt2 * (kax * tt + kgeo * ((1.0 if i == j else 0.0) - tt))
-                        att[i, j] += add
-                        tmp33[i, j] += add
-        if not _inv3(tmp33, tmp33b):
-            return a
+                            tt = tang[sk, i] * tang[sk, j]
+                            add = hdt2 * (kax * tt + kgeo * ((1.0 if i == j else 0.0) - tt))
+                            att[i, j] += add
+                            tmp33[i, j] += add
+            if not _inv3(tmp33, tmp33b):
+                return a
+            for i in range(3):
+                for j in range(3):
+                    node_matrix[a, i, j] = tmp33[i, j]
+                    node_inverse[a, i, j] = tmp33b[i, j]
+        else:
+            # the kept M̃ and its inverse; att = M̃ − M of this iterate's M (the rate terms on both sides)
+            for i in range(3):
+                for j in range(3):
+                    tmp33b[i, j] = node_inverse[a, i, j]
+                    att[i, j] = node_matrix[a, i, j] - mnode[a, i, j]
         for j in range(3):
             hvec[j] = 2.5 * r_t[a, j] - 2.0 * r_tm1[a, j] + 0.5 * r_tm2[a, j]
         for i in range(3):
@@ -1054,6 +1101,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
     flow = ws.flow
     every = rec.plan[0]
     rec_step0 = rec.plan[2]
+    any_aft = series_flags(topo.body_aft_node, topo.tn_nseg)[0]
     for k in range(n_steps):
         # moving attitude chart: a body whose local pitch has passed RECHART_PITCH restarts from a chart
         # centred on its current attitude (between steps, so a failed step's retries stay in one chart)
@@ -1078,7 +1126,8 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             dl = v_new * dt
             l_old = l0[wseg]
             l0[wseg] = l_old + dl
-        reused = nb > 0 and not body_derivatives_due(settings, state.pred_state)
+        reused = (nb > 0 and not body_derivatives_due(settings, state.pred_state)) or not cable_jacobian_due(
+            settings, state.pred_state, int(comp[C_MODE]), any_aft)
         st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
         counters[N_STEPS] += 1
         counters[N_ITERATIONS] += it
@@ -1091,6 +1140,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             # untouched by the failed attempt)
             state.pred_state[PS_VALID] = 0.0
             state.pred_state[PS_BODY_VALID] = 0.0
+            state.pred_state[PS_CABLE_VALID] = 0.0
             st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
             counters[N_ITERATIONS] += it
         if st != OK:
@@ -1099,6 +1149,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             # the history restored to the spacing dt); the sub-steps start with fresh body derivatives
             state.pred_state[PS_VALID] = 0.0
             state.pred_state[PS_BODY_VALID] = 0.0
+            state.pred_state[PS_CABLE_VALID] = 0.0
             ok = False
             for cut in range(1, max_cuts + 1):
                 nsub = 2 ** cut
@@ -1124,6 +1175,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                     if wmode > 0:
                         l0[wseg] = l_old + tau * dl
                     state.pred_state[PS_VALID] = 0.0        # sub-steps start from the lower orders
+                    state.pred_state[PS_CABLE_VALID] = 0.0  # and build the nodes' Newton matrices (full Newton)
                     st, it, el, md = _step(h, top_sub, top_node, topo, segp, bodyp, env, settings, state, ws, comp)
                     counters[N_ITERATIONS] += it
                     if st != OK:
@@ -1148,6 +1200,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
                 _copy_step_state(s_hist_r, s_hist_ang, s_tens, s_cstate, hist_r, hist_ang, tens_hist, cstate)
                 state.pred_state[PS_VALID] = 0.0
                 state.pred_state[PS_BODY_VALID] = 0.0
+                state.pred_state[PS_CABLE_VALID] = 0.0
                 if wmode > 0:
                     l0[wseg] = l_old
                 return st, k, el, md

@@ -49,15 +49,25 @@ S_NEWTON_ESTIMATE = 9       # 1: newton_stop = "estimate" (optional)
 S_PREDICTOR = 10            # 1: predictor = "adaptive" (optional; absent or 0: "quadratic")
 S_BODY_REFRESH = 11         # steps a rigid body's load derivatives serve (solver.body_derivative_refresh;
                             # optional: absent or ≤ 1 recomputes them every step)
-SETTINGS_SIZE = 12
+S_CABLE_REFRESH = 12        # steps the free nodes' Newton matrices serve (solver.cable_jacobian_refresh; optional:
+                            # absent or ≤ 1 builds them at every iteration)
+SETTINGS_SIZE = 13
 
 # the Houbolt step's memory between steps (TimeLevels.pred_state, float64): the predictor's (solver.predictor =
-# "adaptive") and the bodies' reused load derivatives' (solver.body_derivative_refresh > 1)
+# "adaptive"), the bodies' reused load derivatives' (solver.body_derivative_refresh > 1) and the free nodes' reused
+# Newton matrices' (solver.cable_jacobian_refresh > 1)
 PS_VALID = 0                # 1: the predictor's memory (TimeLevels.older_*) continues the time levels
 PS_HIGHER = 1               # how many nodes, bodies and segments extrapolate one order higher in the next step
 PS_BODY_VALID = 2           # 1: TimeLevels.body_relax / body_damp hold derivatives a step may reuse
 PS_BODY_AGE = 3             # steps committed since they were computed (the computing step counts as 1)
-PRED_STATE_SIZE = 4
+PS_CABLE_VALID = 4          # 1: TimeLevels.node_matrix / node_inverse hold Newton matrices a step may reuse
+PS_CABLE_AGE = 5            # steps committed since they were built (the building step counts as 1)
+PS_CABLE_ITERATIONS = 6     # Newton iterations of the step that built them (a reusing step that needs more drops them)
+PRED_STATE_SIZE = 7
+#: Newton iterations beyond those of the step that built the kept node matrices after which a step reusing them gives
+#: up (houbolt.advance retries it with fresh ones; measured: a reusing step in a sea otherwise ran to max_iterations,
+#: 25, once in 400 steps, where the retry with fresh matrices took 4)
+CABLE_REUSE_EXTRA_ITERATIONS = 3
 
 
 # ------------------------------------------------------------------------------------------------------

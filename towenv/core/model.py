@@ -109,12 +109,16 @@ class TimeLevels(NamedTuple):
     cubic_ang: np.ndarray       # (nb,): 1.0: the body's angles extrapolated cubically (else quadratically)
     quad_tens: np.ndarray       # (ns,): 1.0: the segment's tension extrapolated quadratically (else linearly)
     pred_state: np.ndarray      # (PRED_STATE_SIZE,): memory valid, number of higher-order choices, body
-    #                             derivatives valid and their age (layout.PS_*)
+    #                             derivatives valid and their age, node matrices valid and their age (layout.PS_*)
     # each rigid body's load derivatives kept for the next steps (solver.body_derivative_refresh > 1;
     # houbolt.iterate_coefficients): rate-only linearisations, never the converged solution
     body_relax: np.ndarray      # (nb, 6): rotational stiffness (3) and damping (3) of the loads (BK_STIFFNESS/BK_DAMPING
     #                             order, before the tail's stiffness is added)
     body_damp: np.ndarray       # (nb, 3, 3): translational damping −∂F/∂v (body axes)
+    # each free node's Newton matrix M̃ = M + (11Δt/12) B + ½Δt² K_g and its inverse kept for the next steps
+    # (solver.cable_jacobian_refresh > 1; houbolt.node_local_solve): the iteration's matrix, never its solution
+    node_matrix: np.ndarray     # (nn, 3, 3)
+    node_inverse: np.ndarray    # (nn, 3, 3)
 
 
 class SavedStep(NamedTuple):
@@ -177,6 +181,7 @@ class HouboltWork(NamedTuple):
     qaft: np.ndarray            # (nb, k, 3) ... ∂r_aft/∂T of the tow-point node's tension-tree list (rotation included)
     top_sub: np.ndarray         # (3,) the tow point of a sub-step (houbolt.advance's step cuts)
     flow_v: np.ndarray          # (3,) scratch of the orbital-velocity evaluation (orbital_flow._wave_flow)
+    no_bmat: np.ndarray         # (0, 2, 3, 3): an empty bmat — drag Jacobians not wanted (cable_loads.segment_loads)
 
     @staticmethod
     def allocate(nn: int, ns: int, nb: int) -> "HouboltWork":
@@ -188,7 +193,7 @@ class HouboltWork(NamedTuple):
             z((nb, 3, 3)), z((nb, 3)), z((nb, 3, 3)), z((nb, 3)), z((nb, 3)), z((nb, 3)),
             z(3), z(3), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)), z((3, 3)),
             z(3), z(3), z(3), z(1), z(3), z((nb1, BK_SIZE)), z((nb1, 3, 3)), z((6, 3)), z((nn, 3)), z((6, ns)),
-            z((nb1, 3, 3)), z((nb1, 3, 3)), z((nb1, mk, 3)), z(3), z(3))
+            z((nb1, 3, 3)), z((nb1, 3, 3)), z((nb1, mk, 3)), z(3), z(3), z((0, 2, 3, 3)))
 
 
 class Recording(NamedTuple):

@@ -75,6 +75,7 @@ class SolverSettings:
     newton_stop: str = _scene_default("newton_stop")
     predictor: str = _scene_default("predictor")
     body_derivative_refresh: int = _scene_default("body_derivative_refresh")
+    cable_jacobian_refresh: int = _scene_default("cable_jacobian_refresh")
 
     def array(self):
         if not (0.0 <= self.rechart_pitch <= 1.2):
@@ -87,6 +88,10 @@ class SolverSettings:
                 self.body_derivative_refresh, bool) and 1 <= self.body_derivative_refresh <= 1000):
             raise ValueError("solver.body_derivative_refresh: must be an integer within [1, 1000] "
                              f"(got {self.body_derivative_refresh!r})")
+        if not (isinstance(self.cable_jacobian_refresh, (int, np.integer)) and not isinstance(
+                self.cable_jacobian_refresh, bool) and 1 <= self.cable_jacobian_refresh <= 1000):
+            raise ValueError("solver.cable_jacobian_refresh: must be an integer within [1, 1000] "
+                             f"(got {self.cable_jacobian_refresh!r})")
         a = np.empty(L.SETTINGS_SIZE)
         a[L.S_TOLERANCE] = self.tolerance
         a[L.S_RELATIVE_TOLERANCE] = self.relative_tolerance
@@ -100,6 +105,7 @@ class SolverSettings:
         a[L.S_NEWTON_ESTIMATE] = 1.0 if self.newton_stop == "estimate" else 0.0
         a[L.S_PREDICTOR] = 1.0 if self.predictor == "adaptive" else 0.0
         a[L.S_BODY_REFRESH] = float(self.body_derivative_refresh)
+        a[L.S_CABLE_REFRESH] = float(self.cable_jacobian_refresh)
         return a
 
 
@@ -339,7 +345,8 @@ class Simulator:
         self.tens_hist = np.zeros((2, ns))
         self.top_react = np.zeros(3)
         self._older = (np.zeros((nn, 3)), np.zeros((nb, 3)), np.zeros(ns), np.zeros(nn), np.zeros(nb), np.zeros(ns),
-                       np.zeros(L.PRED_STATE_SIZE), np.zeros((nb, 6)), np.zeros((nb, 3, 3)))
+                       np.zeros(L.PRED_STATE_SIZE), np.zeros((nb, 6)), np.zeros((nb, 3, 3)), np.zeros((nn, 3, 3)),
+                       np.zeros((nn, 3, 3)))
         self._state = TimeLevels(self.hist_r, self.hist_ang, self.tens_hist, self.top_react, self.cstate,
                                  self.body_chart, *self._older)
         self._ws = HouboltWork.allocate(nn, ns, nb)
@@ -458,17 +465,19 @@ class Simulator:
     def older(self) -> tuple:
         """The Houbolt step's memory between steps, by reference: ``model.TimeLevels``' last nine arrays — the
         predictor's (older_r, older_ang, older_tens, cubic_r, cubic_ang, quad_tens; solver.predictor), pred_state
-        (layout.PS_*), and the bodies' reused load derivatives (body_relax, body_damp;
-        solver.body_derivative_refresh) — docs/architecture.md."""
+        (layout.PS_*), the bodies' reused load derivatives (body_relax, body_damp;
+        solver.body_derivative_refresh) and the free nodes' reused Newton matrices (node_matrix, node_inverse;
+        solver.cable_jacobian_refresh) — docs/architecture.md."""
         return self._older
 
     def forget_step_memory(self) -> None:
         """The Houbolt step's memory no longer continues the time levels (they were written from outside the
         step: initial state, remesh, restore of an older snapshot, another scheme): the next steps extrapolate
         with the lower orders until a step has been committed on top of them, and the next step computes the
-        bodies' load derivatives afresh."""
+        bodies' load derivatives and the free nodes' Newton matrices afresh."""
         self._older[6][L.PS_VALID] = 0.0
         self._older[6][L.PS_BODY_VALID] = 0.0
+        self._older[6][L.PS_CABLE_VALID] = 0.0
 
     def restore(self, snap: Snapshot) -> None:
         if snap.system is not None and snap.system is not self.system:

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from ..core.layout import (PRED_STATE_SIZE, PS_BODY_AGE, PS_BODY_VALID, PS_HIGHER, PS_VALID, S_ANGLE_TOLERANCE, S_BODY_REFRESH, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
+from ..core.layout import (CABLE_REUSE_EXTRA_ITERATIONS, PRED_STATE_SIZE, PS_BODY_AGE, PS_BODY_VALID, PS_CABLE_AGE, PS_CABLE_ITERATIONS, PS_CABLE_VALID, PS_HIGHER, PS_VALID, S_ANGLE_TOLERANCE, S_BODY_REFRESH, S_CABLE_REFRESH, S_MAX_ITERATIONS, S_MAX_STRAIN, S_NEWTON_ESTIMATE, S_PLANAR, S_PREDICTOR, S_RELATIVE_TOLERANCE, S_TOLERANCE)
 from ..core import layout as L
 from ..core.layout import BP_AFT_TOW_POINT, BP_REDUCED_DOF, BP_TAIL_MASS
 import scipy.sparse as sp
@@ -708,7 +708,9 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
        ``older[7:]``, refreshed when ``houbolt.body_derivatives_due`` says so) — plus the node's own string
        stiffness K_g, :func:`geometric_stiffness_np`),
        M̃ = M + L, and the node-local affine map
-       r_a(T) = M̃⁻¹[M (2.5r^t − 2r^{t−1} + 0.5r^{t−2}) + L r* + ½Δt² (F_o + Σ σ T t)];
+       r_a(T) = M̃⁻¹[M (2.5r^t − 2r^{t−1} + 0.5r^{t−2}) + L r* + ½Δt² (F_o + Σ σ T t)]
+       (with ``solver.cable_jacobian_refresh`` > 1 the free nodes' M̃ and M̃⁻¹ of an earlier step, ``older[9:]``,
+       and L = M̃ − M between refreshes, as ``houbolt.cable_jacobian_due`` decides);
     3. residuals g = ℓ − l(1 + T/EA) at r(T), the tension matrix K = −J (coefficient tangents), slack
        segments (T ≤ 0 and g < 0) held at T = 0 by identity rows, K δT = g, T ← max(T + δT, 0) (5.3–5.6, 9);
     4. positions at the new tensions; body angular accelerations ω̇ = A_rr⁻¹(M − A_rt Λ r̈) mapped to Euler
@@ -751,13 +753,20 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     if older is None:
         older = (np.zeros_like(hist_r[0]), np.zeros_like(hist_ang[0]), np.zeros_like(tens_hist[0]),
                  np.zeros(hist_r.shape[1]), np.zeros(hist_ang.shape[1]), np.zeros(tens_hist.shape[1]),
-                 np.zeros(PRED_STATE_SIZE), np.zeros((hist_ang.shape[1], 6)), np.zeros((hist_ang.shape[1], 3, 3)))
+                 np.zeros(PRED_STATE_SIZE), np.zeros((hist_ang.shape[1], 6)), np.zeros((hist_ang.shape[1], 3, 3)),
+                 np.zeros((hist_r.shape[1], 3, 3)), np.zeros((hist_r.shape[1], 3, 3)))
     older = tuple(np.array(a, float) for a in older)
     # the bodies' load derivatives: afresh on the first iteration, or the kept ones (solver.body_derivative_refresh;
     # houbolt.body_derivatives_due)
     refresh = settings[S_BODY_REFRESH] if settings.shape[0] > S_BODY_REFRESH else 1.0
     body_fresh = refresh <= 1.0 or older[6][PS_BODY_VALID] == 0.0 or older[6][PS_BODY_AGE] >= refresh
     kept_relax, kept_damp = older[7].copy(), older[8].copy()
+    # the free nodes' Newton matrices: built at every iteration, or the kept ones (a modified Newton;
+    # solver.cable_jacobian_refresh, houbolt.cable_jacobian_due — the twin has no compensator)
+    cable_refresh = settings[S_CABLE_REFRESH] if settings.shape[0] > S_CABLE_REFRESH else 1.0
+    cable_fresh = (cable_refresh <= 1.0 or bool(np.any(np.asarray(sys.body_aft_node) >= 0))
+                   or older[6][PS_CABLE_VALID] == 0.0 or older[6][PS_CABLE_AGE] >= cable_refresh)
+    kept_mt, kept_minv = older[9].copy(), older[10].copy()
     valid = older[6][PS_VALID] != 0.0
     up_r = (older[3] != 0.0) & valid         # one order higher, per node / body / segment
     up_ang = (older[4] != 0.0) & valid
@@ -886,9 +895,17 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
                     lin[sys.body_node[b]] += hdt2 * kt
                     if it == 1:
                         relax[b, :3] += kr
-        Mt = mnode + lin
-        minv = np.zeros_like(Mt)
-        minv[free] = np.linalg.inv(Mt[free])
+        if cable_fresh:
+            Mt = mnode + lin
+            minv = np.zeros_like(Mt)
+            minv[free] = np.linalg.inv(Mt[free])
+            kept_mt[free] = Mt[free]
+            kept_minv[free] = minv[free]
+        else:
+            # the kept M̃ and its inverse; lin = M̃ − M of this iterate (the rate terms on both sides)
+            minv = np.zeros_like(mnode)
+            minv[free] = kept_minv[free]
+            lin[free] = kept_mt[free] - mnode[free]
         if planar:
             # vertical plane: the lateral coordinate held (no y row; the accepted scenes have no x–y, y–z coupling)
             minv[:, 1, :] = 0.0
@@ -977,6 +994,8 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
             if ok_t and ok_a:
                 status = OK
                 break
+        if not cable_fresh and it >= older[6][PS_CABLE_ITERATIONS] + CABLE_REUSE_EXTRA_ITERATIONS:
+            break                   # the kept matrices converge too slowly: the kernel's caller retries afresh
         prev_d = maxd
         prev_a = dang_max
     if status != OK:
@@ -997,7 +1016,12 @@ def houbolt_step_np(sim_like, dt, r_top_new, trace=None) -> TwinStep:
     pred_state = older[6].copy()
     pred_state[PS_BODY_VALID] = 1.0 if body_fresh else body_state[PS_BODY_VALID]
     pred_state[PS_BODY_AGE] = 1.0 if body_fresh else body_state[PS_BODY_AGE] + 1.0
-    older = older[:6] + (pred_state, kept_relax, kept_damp)
+    pred_state[PS_CABLE_VALID] = 1.0 if cable_fresh else body_state[PS_CABLE_VALID]
+    pred_state[PS_CABLE_AGE] = 1.0 if cable_fresh else body_state[PS_CABLE_AGE] + 1.0
+    pred_state[PS_CABLE_ITERATIONS] = it if cable_fresh else body_state[PS_CABLE_ITERATIONS]
+    if not cable_fresh and it > body_state[PS_CABLE_ITERATIONS]:
+        pred_state[PS_CABLE_VALID] = 0.0        # the kept matrices slowed the iteration: built afresh next step
+    older = older[:6] + (pred_state, kept_relax, kept_damp, kept_mt, kept_minv)
     return TwinStep(sys, sim_like.settings, new_hist_r, new_hist_ang, new_tens, top_react, OK, it, -1, maxd, chart,
                     older)
 
