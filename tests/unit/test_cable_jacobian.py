@@ -171,3 +171,15 @@ def test_a_bad_refresh_is_refused_naming_the_field(bad):
     sim.settings.cable_jacobian_refresh = bad
     with pytest.raises(ValueError, match=r"solver.cable_jacobian_refresh: must be an integer within \[1, 1000\]"):
         sim.advance_steps(1)
+
+
+def test_a_step_reusing_slow_matrices_gives_up_early():
+    """400 steps of two_part_tow_1 in the coastal SS4 sea with N = 10: no attempt runs longer than the full Newton's
+    longest step (6 iterations here, with N = 1 too): a reusing step that needs 3 iterations more than the step that
+    built its matrices gives up and is retried with fresh ones. (Without that rule one step ran to the 25-iteration
+    limit before its retry converged in 4.)"""
+    full, reuse = _sim(1), _sim(10)
+    full.advance_steps(400)
+    reuse.advance_steps(400)
+    assert reuse.stats["step_cuts"] == 0
+    assert reuse.stats["max_iterations"] <= full.stats["max_iterations"], (reuse.stats, full.stats)
