@@ -50,10 +50,13 @@ slack penalty moved back by 0.1 (the threshold case above).
 Regenerated a seventh time (2026-12-06, issue 15) for the reused free-node Newton matrices
 (``solver.cable_jacobian_refresh``, default 10 since; a modified Newton, stopping elsewhere within its tolerances;
 with 1 the kernel is the one before, bit for bit: ``scripts/trajectory_digest.py``, 54 arrays, ``znver3`` host).
-Against the previous file: info texts, flags and episode lengths identical (the numerical-failure case fails at the
-same step; the compensator cases build the matrices every step and are unchanged); largest differences 4.7e-3 in
-observations (of ~11, the remeshing winch case), 3.6e-2 in reward components (of ~99, same case), and the vector
-winch case's step 11, copy 1, whose slack penalty moved by 0.1 again (the threshold case above).
+Against the previous file: info texts, flags and episode lengths identical except the numerical-failure case (below);
+largest differences 4.7e-3 in observations (of ~11, the remeshing winch case), 3.6e-2 in reward components (of ~99,
+same case), 1.2e-3 in the compensator cases' observations (of ~6), and the vector winch case's step 11, copy 1, whose
+slack penalty moved by 0.1 again (the threshold case above). The numerical-failure case (a compensator scene at
+Δt 0.5 s without halvings) ends in the same failure (Newton on the secondary's segment 1) at t = 13 s again instead
+of 16.5 s (26 steps; its first 26 observations within 1.0e-3 of the previous file's) — the edge-of-failure run above,
+where a tolerance-level difference moves the step that fails.
 
 As for ``houbolt_reference.npz``, numba compiles for the host CPU: the file records :func:`fingerprint`
 and the comparison is bit for bit when it matches, to round-off otherwise.

@@ -6,8 +6,8 @@ M̃ = M + (11Δt/12) B + ½Δt² K_g (drag Jacobians, string stiffness) built at
 rate of the iteration depends on M̃: with ``cable_jacobian_refresh = N`` the matrices (and their inverses) are built
 every N steps and the kept ones serve in between (``TimeLevels.node_matrix``/``node_inverse``); a step that needs more
 iterations than the one that built them drops them (the next step builds). N = 1 is the kernel before this setting;
-the default is 10. Not with a heave compensator (its sheave node's law reads the drag Jacobian) or a series tow's
-aft tow point: those steps build them always.
+the default is 10. A heave compensator's sheave node keeps its vertical drag damping (a rate-only term of its own
+law) with them. Not with a series tow's aft tow point: those steps build them always.
 
 Checked here: the kernel and the numpy twin reuse on the same steps and reach the same states; N = 1 builds every
 step; reuse reaches the solution of N = 1 within what the Newton tolerances let accumulate, with at most a few per
@@ -148,18 +148,38 @@ def test_a_failed_step_builds_the_matrices_afresh():
     assert seen >= 3
 
 
-@pytest.mark.parametrize("scene", ["two_part_coastal_ss4", "series_multitow"])
-def test_scenes_it_does_not_apply_to_build_every_step(scene):
-    """With a heave compensator (two_part_coastal_ss4) or a series tow's aft tow point (series_multitow) every step
-    builds the matrices whatever N (age stays 1), and the run equals N = 1's bit for bit."""
+def test_a_series_tow_builds_every_step():
+    """With a series tow's aft tow point (series_multitow) every step builds the matrices whatever N (age stays 1),
+    and the run equals N = 1's bit for bit."""
     runs = []
     for n in (10, 1):
-        sim = _sim(n, scene=scene)
+        sim = _sim(n, scene="series_multitow")
         sim.advance(3.0)
         assert _age(sim) == (1.0, 1.0)
         runs.append((sim.hist_r.copy(), sim.tens_hist.copy()))
     for a, b in zip(*runs):
         assert np.array_equal(a, b)
+
+
+def test_a_compensated_tow_reuses_them_and_reaches_the_same_solution():
+    """two_part_coastal_ss4 (a passive heave compensator at the sheave, coastal SS4), 30 s: the matrices are reused
+    (the sheave's drag damping kept with them), the compensator's stroke and the fish's state within the Newton
+    tolerances of N = 1's (as test_reuse_reaches_the_same_solution), at most 10 % more iterations, no step cut."""
+    one, ten = _sim(1, "two_part_coastal_ss4"), _sim(10, "two_part_coastal_ss4")
+    strokes, ages = [], []
+    for sim in (one, ten):
+        z = []
+        for _ in range(300):
+            sim.advance_steps(2)
+            z.append(sim.compensator_state()["stroke"])
+            ages.append(_age(sim)[1])
+        strokes.append(np.array(z))
+    assert max(ages[300:]) > 1.0 and max(ages[:300]) == 1.0       # reused with N = 10, never with N = 1
+    assert ten.stats["step_cuts"] == one.stats["step_cuts"] == 0
+    assert np.max(np.abs(one.hist_r[0] - ten.hist_r[0])) < 2e-3
+    assert np.max(np.abs(one.tens_hist[0] - ten.tens_hist[0])) < 0.5
+    assert np.max(np.abs(strokes[0] - strokes[1])) < 1e-3 * np.std(strokes[0])
+    assert ten.stats["mean_iterations"] <= 1.10 * one.stats["mean_iterations"]
 
 
 @pytest.mark.parametrize("bad", [0, -3, 1001, 2.5, True])

@@ -103,7 +103,7 @@ def houbolt_step(dt, r_top_new, top_node, topo, segp, bodyp, env, settings, stat
     any_aft, any_merged = series_flags(body_aft_node, tn_nseg)
     # the free nodes' Newton matrices: built at every iteration of this step, or those of an earlier step reused
     # (solver.cable_jacobian_refresh)
-    cable_fresh = cable_jacobian_due(settings, pred_state, cmode, any_aft)
+    cable_fresh = cable_jacobian_due(settings, pred_state, any_aft)
     status = FAIL_NEWTON
     elem = -1
     it = 0
@@ -236,16 +236,15 @@ def body_derivatives_due(settings, pred_state):
 
 
 @njit_internal
-def cable_jacobian_due(settings, pred_state, cmode, any_aft):
+def cable_jacobian_due(settings, pred_state, any_aft):
     """Whether this step builds the free nodes' Newton matrices M̃ = M + (11Δt/12) B + ½Δt² K_g and their inverses
     at every iteration (:func:`node_local_solve`) rather than reuse those kept in ``TimeLevels.node_matrix`` /
-    ``node_inverse`` (a modified Newton): always with ``solver.cable_jacobian_refresh`` ≤ 1 (or a settings array
-    without it), with a heave compensator (its sheave node's own law reads the node's drag Jacobian) or a series
-    tow's aft tow point (its coupling terms are built with the matrix), when none are kept (``PS_CABLE_VALID`` = 0:
+    ``node_inverse`` (a modified Newton; a compensator's sheave node keeps its vertical drag damping there too):
+    always with ``solver.cable_jacobian_refresh`` ≤ 1 (or a settings array without it), with a series tow's aft tow
+    point (its coupling terms are built with the matrix), when none are kept (``PS_CABLE_VALID`` = 0:
     initial state, a restore without them, a remesh, a failed step) and when they have served ``refresh`` steps."""
     refresh = settings[S_CABLE_REFRESH] if settings.shape[0] > S_CABLE_REFRESH else 1.0
-    return (refresh <= 1.0 or cmode != 0 or any_aft or pred_state[PS_CABLE_VALID] == 0.0
-            or pred_state[PS_CABLE_AGE] >= refresh)
+    return (refresh <= 1.0 or any_aft or pred_state[PS_CABLE_VALID] == 0.0 or pred_state[PS_CABLE_AGE] >= refresh)
 
 
 @njit_internal
@@ -516,6 +515,12 @@ def node_local_solve(dt, any_aft, planar, comp, cmode, act_new, r_t, r_tm1, r_tm
     hdt2 = 0.5 * dt * dt
     for a in range(nn):
         if node_kind[a] == COMPENSATOR:
+            # the sheave's law reads the node's vertical drag damping, a rate-only term of its implicit update: kept
+            # with the node matrices (in this non-free node's unused slot) and restored when they are reused
+            if cable_fresh:
+                node_matrix[a, 2, 2] = bnode[a, 2, 2]
+            else:
+                bnode[a, 2, 2] = node_matrix[a, 2, 2]
             _compensator_node(a, int(comp[C_SHIP]), comp, cmode, act_new, dt, rs, r_t, r_tm1, r_tm2, node_nseg,
                               node_segs, tang, stretched, tens, mnode, bnode, fnode, acon, qvec)
             continue
@@ -1127,7 +1132,7 @@ def advance(n_steps, dt, top_path, top_node, topo, segp, bodyp, env, settings, s
             l_old = l0[wseg]
             l0[wseg] = l_old + dl
         reused = (nb > 0 and not body_derivatives_due(settings, state.pred_state)) or not cable_jacobian_due(
-            settings, state.pred_state, int(comp[C_MODE]), any_aft)
+            settings, state.pred_state, any_aft)
         st, it, el, md = _step(dt, top_path[k], top_node, topo, segp, bodyp, env, settings, state, ws, comp)
         counters[N_STEPS] += 1
         counters[N_ITERATIONS] += it

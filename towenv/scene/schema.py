@@ -700,7 +700,7 @@ class Solver(_Model):
     body_derivative_refresh: Int(ge=1, le=1000) = 10
     # Houbolt's free-node Newton matrices M̃ = M + (11Δt/12) B + ½Δt² K_g (drag Jacobians, string stiffness) and their
     # inverses: built afresh every this many steps and reused in between, a modified Newton (1: every iteration, the
-    # kernel before this setting; not with a heave compensator or a series tow's aft tow point; a step that needs
+    # kernel before this setting; not with a series tow's aft tow point; a step that needs
     # more iterations than the building step drops them; docs/architecture.md)
     cable_jacobian_refresh: Int(ge=1, le=1000) = 10
     # series tows: the tail's top segments in the body's clique of the tension solve ("monolithic"), or its pull
