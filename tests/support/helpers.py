@@ -88,3 +88,32 @@ def assert_same_solution_within_newton_tolerance(a, b):
     assert np.max(np.abs(ra - rb)) < 2e-3
     assert np.max(np.abs(aa - ab)) < 1e-3
     assert np.max(np.abs(za - zb)) < 1e-3 * np.std(za)
+
+
+def assert_memory_travels_with_snapshots(sim, make, age):
+    """The Houbolt step's kept memory (reused body derivatives or node matrices) and snapshots: ``sim`` is mid-cycle
+    (its memory valid and some steps old, ``age(sim)`` = (valid, age)); a snapshot of it continues bit for bit after
+    restore (the memory restored with it); restored without the memory (``predictor=None``), or reset, the next step
+    computes it afresh (age 1); and a reset run equals a fresh one from ``make()`` bit for bit (40 steps each)."""
+    import dataclasses
+
+    import numpy as np
+    mid = age(sim)
+    snap = sim.snapshot()
+    sim.advance_steps(40)
+    first = sim.hist_r.copy(), sim.tens_hist.copy(), sim.hist_ang.copy()
+    sim.restore(snap)
+    assert age(sim) == mid
+    sim.advance_steps(40)
+    for a, b in zip(first, (sim.hist_r, sim.tens_hist, sim.hist_ang)):
+        assert np.array_equal(a, b)
+    sim.restore(dataclasses.replace(snap, predictor=None))
+    assert age(sim)[0] == 0.0
+    sim.advance_steps(1)
+    assert age(sim) == (1.0, 1.0)
+    sim.reset()
+    assert age(sim)[0] == 0.0
+    sim.advance_steps(40)
+    fresh = make()
+    fresh.advance_steps(40)
+    assert np.array_equal(fresh.hist_r, sim.hist_r) and np.array_equal(fresh.tens_hist, sim.tens_hist)

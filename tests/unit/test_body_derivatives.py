@@ -15,12 +15,11 @@ derivatives travel with snapshots and are dropped where a step is not a continua
 reset, attitude re-chart, failed step: the retry and the sub-steps compute them afresh); a bad value is refused
 naming the field.
 """
-import dataclasses
-
 import numpy as np
 import pytest
 
-from helpers import assert_same_solution_within_newton_tolerance, kernel_and_twin_step, run_and_record_fish
+from helpers import (assert_memory_travels_with_snapshots, assert_same_solution_within_newton_tolerance,
+                     kernel_and_twin_step, run_and_record_fish)
 from towenv import SceneError
 from towenv.core.layout import PS_BODY_AGE, PS_BODY_VALID
 from towenv.core.simulator import Simulator, load
@@ -97,24 +96,7 @@ def test_kept_derivatives_travel_with_snapshots_and_are_dropped_without_one():
     sim = _sim(10)
     sim.advance_steps(200 + 7)
     assert _age(sim) == (1.0, 7.0)
-    snap = sim.snapshot()
-    sim.advance_steps(40)
-    first = sim.hist_r.copy(), sim.tens_hist.copy(), sim.hist_ang.copy()
-    sim.restore(snap)
-    assert _age(sim) == (1.0, 7.0)
-    sim.advance_steps(40)
-    for a, b in zip(first, (sim.hist_r, sim.tens_hist, sim.hist_ang)):
-        assert np.array_equal(a, b)
-    sim.restore(dataclasses.replace(snap, predictor=None))
-    assert _age(sim)[0] == 0.0
-    sim.advance_steps(1)
-    assert _age(sim) == (1.0, 1.0)
-    sim.reset()
-    assert _age(sim)[0] == 0.0
-    sim.advance_steps(40)
-    fresh = _sim(10)
-    fresh.advance_steps(40)
-    assert np.array_equal(fresh.hist_r, sim.hist_r) and np.array_equal(fresh.tens_hist, sim.tens_hist)
+    assert_memory_travels_with_snapshots(sim, lambda: _sim(10), _age)
 
 
 def test_a_failed_step_computes_the_derivatives_afresh():
