@@ -27,7 +27,9 @@ linear predictor from the last 10 s of the MRU's vertical motion (``agents/predi
 feature (the constant included) multiplied by skyhook's switching state (1 while the base law damps, ż_abs·ṡ > 0, else
 0; :func:`skyhook_on`): separate residual weights for the damping-on and damping-off phases (90 features). Feature
 set ``"hst"`` adds to "hs" the cable's state at the sheave, ungated: the top tension's deviation from its static value
-and the tow point's velocity along the top cable at the same lags (112 features; :data:`CABLE_CHANNELS`).
+and the tow point's velocity along the top cable at the same lags (112 features; :data:`CABLE_CHANNELS`). Feature set
+``"hsf"`` adds to "hs" a second gated copy of every "h" feature, multiplied by the *fish's* switching state (1 while the
+fish's heave rate and the stroke velocity have one sign, :func:`fish_on`; 135 features).
 
 Θ = 0 is the skyhook law exactly. The policy is causal: it acts on the observation vector and its own memory of
 earlier observations, plus the sea-state estimate at episode start (as the base does).
@@ -78,7 +80,8 @@ from .common import (COMPENSATOR_ID, ObsReader, add_parallel_flag, nearest_key, 
 from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, push
 from .predictor import feature_names as predicted_names
 
-__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "CABLE", "CABLE_CHANNELS",
+__all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "FISH_GATED", "FISH_GATE_PREFIX",
+           "fish_on", "CABLE", "CABLE_CHANNELS",
            "CABLE_OFFSETS", "ADDED_KINDS", "added_features",
            "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
@@ -124,14 +127,23 @@ N_ACT = 2
 #: predicted by the policy's own causal linear predictor from the last 10 s of the MRU's vertical motion
 #: (``agents/predictor.py``, :data:`agents.predictor.COMP_PRED_CHANNELS`, stored in the policy file), scaled as the
 #: channel's history features, placed before the constant
-FEATURE_SETS = ("h", "hq", "hs", "hst")
+FEATURE_SETS = ("h", "hq", "hs", "hst", "hsf")
 PREDICTED = frozenset({"hq"})
 #: feature set "hs" = "h" + every "h" feature (the constant included) multiplied by skyhook's switching state
 #: ``on`` = 1 while the sheave's absolute velocity has the stroke velocity's sign (skyhook damps; the same condition
 #: as the base law, read from the same observation), else 0: a residual with separate weights for the damping-on and
 #: damping-off phases (90 features; the gated names are prefixed ``on*``)
-GATED = frozenset({"hs", "hst"})
+GATED = frozenset({"hs", "hst", "hsf"})
 GATE_PREFIX = "on*"
+#: feature set "hsf" = "hs" + a second copy of every "h" feature multiplied by the *fish's* switching state
+#: ``fish_on`` = 1 while the fish's heave rate and the stroke velocity have the same sign, else 0 (:func:`fish_on`):
+#: the skyhook gate splits the residual by what the sheave does, this one by what the fish does relative to the
+#: stroke — whether the damper's force on the cable (−b·ṡ) currently pushes the tension with or against the fish's
+#: motion, the switching condition of a semi-active law aimed at the fish (135 features; the names prefixed
+#: ``fish*``; after the skyhook-gated copy). Either sign convention gives the same class: the ungated weights cover
+#: the other phase
+FISH_GATED = frozenset({"hsf"})
+FISH_GATE_PREFIX = "fish*"
 #: feature set "hst" = "hs" + the cable's state at the sheave: the top tension's deviation from its static value
 #: (``top_tension`` − 1, in units of the static top tension) and the tow point's velocity along the top cable
 #: (``tow_vel_along``, m/s) at the lags :data:`LAG_STEPS`, ungated, after the gated copy (112 features). Under
@@ -144,7 +156,7 @@ CABLE_CHANNELS = ("top_tension", "tow_vel_along")
 #: the value subtracted from a cable channel before scaling (the static top tension is 1 in its channel's units)
 CABLE_OFFSETS = {"top_tension": 1.0, "tow_vel_along": 0.0}
 #: the kinds of features a feature set adds to "h", and the sets that add them (a set adding two kinds lists both)
-ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED, "cable": CABLE}
+ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED, "cable": CABLE, "fish": FISH_GATED}
 
 
 def feature_names(feature_set: str = "h") -> list[str]:
@@ -155,8 +167,11 @@ def feature_names(feature_set: str = "h") -> list[str]:
         pred = predicted_names(COMP_PRED_CHANNELS)
     names = ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
              + list(NONLINEAR) + pred + ["const"])
+    base = list(names)
     if feature_set in GATED:
-        names += [GATE_PREFIX + nm for nm in names]
+        names += [GATE_PREFIX + nm for nm in base]
+    if feature_set in FISH_GATED:
+        names += [FISH_GATE_PREFIX + nm for nm in base]
     if feature_set in CABLE:
         names += [f"{c}@-{lag / 10:.1f}s" for c in CABLE_CHANNELS for lag in LAG_STEPS]
     return names
@@ -181,6 +196,8 @@ def added_features(feature_set: str, kind: str | None = None) -> tuple[str, np.n
         return "predicted", np.array([nm.endswith("(pred)") for nm in names])
     if kind == "gated":
         return "gated", np.array([nm.startswith(GATE_PREFIX) for nm in names])
+    if kind == "fish":
+        return "fish", np.array([nm.startswith(FISH_GATE_PREFIX) for nm in names])
     if kind == "cable":
         n_cable = len(CABLE_CHANNELS) * len(LAG_STEPS)
         return "cable", np.arange(len(names)) >= len(names) - n_cable
@@ -213,10 +230,11 @@ class _Features:
     policy uses it with n = 1, so training and deployment share one arithmetic."""
 
     def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gated: bool = False,
-                 cable: bool = False):
+                 cable: bool = False, fish_gated: bool = False):
         self.reader = reader
         self.half = float(half_stroke)
         self.gated = bool(gated)
+        self.fish_gated = bool(fish_gated)
         self.cable = bool(cable)
         self.chist = None                   # the cable channels' history ring (n, channels, N_HISTORY), newest first
         self.scales = dict(scales)
@@ -252,8 +270,11 @@ class _Features:
             parts.append(p.predict(self.pring, self.pkeys))
         parts.append(np.ones((n, 1)))
         phi = np.concatenate(parts, axis=1)
+        base = phi
         if self.gated:
-            phi = np.concatenate([phi, phi * skyhook_on(r, obs)[:, None]], axis=1)
+            phi = np.concatenate([phi, base * skyhook_on(r, obs)[:, None]], axis=1)
+        if self.fish_gated:
+            phi = np.concatenate([phi, base * fish_on(r, obs)[:, None]], axis=1)
         if self.cable:
             c = np.stack([(r.batch(obs, ch) - CABLE_OFFSETS[ch]) / sc[ch] for ch in CABLE_CHANNELS], axis=1)
             if first or self.chist is None:
@@ -272,6 +293,12 @@ def skyhook_on(reader, obs):
     sd = reader.batch(obs, "comp_stroke_vel")
     z_abs = reader.batch(obs, "tow_vel_z") + sd
     return ((z_abs * sd > 0.0) & (np.abs(sd) > 1e-6)).astype(float)
+
+
+def fish_on(reader, obs):
+    """The fish's switching state per row of a batch of observations (feature set "hsf"): 1.0 where the fish's heave
+    rate (``fish_heave_rate``) and the stroke velocity (``comp_stroke_vel``) have the same sign, else 0.0."""
+    return (reader.batch(obs, "fish_heave_rate") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
 
 
 def _residual(theta, phi):
@@ -371,7 +398,8 @@ class ARSCompensatorPolicy:
         self.reader = self.base.reader
         self.u = env.unwrapped
         self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor,
-                                gated=self.feature_set in GATED, cable=self.feature_set in CABLE)
+                                gated=self.feature_set in GATED, cable=self.feature_set in CABLE,
+                                fish_gated=self.feature_set in FISH_GATED)
         self._th = None
         return self
 
@@ -424,7 +452,7 @@ class _Batch:
         self.table = base_table
         self.feature_set = feature_set
         self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gated=feature_set in GATED,
-                                  cable=feature_set in CABLE)
+                                  cable=feature_set in CABLE, fish_gated=feature_set in FISH_GATED)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS

@@ -73,7 +73,7 @@ def test_zero_weights_are_the_skyhook_law(env):
         assert np.array_equal(a.data[k], b.data[k]), k
 
 
-@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst", "hsf"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, fs):
     """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ, the
     same end-stop hits and the same stroke-margin term (from the ``comp_stroke`` observation, which is the true
@@ -169,7 +169,7 @@ def test_stop_guard_acts_exactly_where_its_condition_holds(env):
         AC.ARSCompensatorPolicy({}, table, meta={"stop_guard": 1.5})
 
 
-@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst", "hsf"])
 def test_policy_is_causal(env, fs):
     """Actions depend only on the observations handed to predict() (and the sea-state estimate): a replay of the
     recorded observations to a fresh policy bound to an env in an unrelated state gives the same actions, and
@@ -428,6 +428,51 @@ def test_gated_feature_set_switches_with_skyhook(env):
             n_on += 1
             np.testing.assert_allclose(a_c, np.clip(a_sky, -1, 1), rtol=0, atol=1e-6)
         else:
+            n_off += 1
+            np.testing.assert_allclose(a_c, a_h1, rtol=0, atol=1e-6)
+        obs, _r, term, trunc, _ = env.step(a_c)
+        assert not (term or trunc)
+    assert n_on > 20 and n_off > 20                     # both phases were exercised
+
+
+def test_fish_gated_feature_set_switches_with_the_fish(env):
+    """hsf = hs + every h feature times the fish's switching state (fish heave rate and stroke velocity of one sign).
+    Independently of the feature code: with the fish-gated weights at 0 the policy acts as its hs policy (to
+    round-off), and with fish-gated weights = −(the h weights) and no skyhook-gated weights the residual vanishes
+    exactly on the steps where the fish's heave rate times the stroke velocity (read here in float64 from the
+    observation) is positive — the action is then skyhook's — and is the h policy's on the others."""
+    from agents.classical import SkyhookCompensator
+    names, hs_names, hsf = AC.feature_names("h"), AC.feature_names("hs"), AC.feature_names("hsf")
+    assert hsf == hs_names + [AC.FISH_GATE_PREFIX + n for n in names] and len(hsf) == 135
+    assert AC.added_features("hsf", "fish")[1].sum() == 45 and AC.added_features("hsf", "gated")[1].sum() == 45
+    assert not AC.added_features("hs", "fish")[1].any() and not AC.added_features("hst", "fish")[1].any()
+    h = _policy(scale=0.05, seed=8)
+    hs = _policy(scale=0.03, seed=9, fs="hs")
+    zero = {k: np.concatenate([v, np.zeros((AC.N_ACT, 45))], axis=1) for k, v in hs.theta.items()}
+    p0 = AC.ARSCompensatorPolicy(zero, hs.base_table, meta={"feature_set": "hsf"})
+    sea, seed = env.unwrapped.eval_sea_states()[8]
+    a_hs = _actions(env, hs.bind_env(env), sea, seed, 200)
+    np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 200), a_hs, rtol=0, atol=1e-6)
+    cancel = {k: np.concatenate([v, np.zeros_like(v), -v], axis=1) for k, v in h.theta.items()}
+    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsf"}).bind_env(env)
+    sky = SkyhookCompensator(env, table=h.base_table)
+    h.bind_env(env)
+    r = gc.reader
+    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
+    n_on = n_off = 0
+    for k in range(200):
+        first = np.array([k == 0])
+        if k == 0:
+            sky.reset()
+        a_sky = np.asarray(sky.act(np.asarray(obs, float)), np.float32)
+        a_h1, _ = h.predict(obs, episode_start=first)
+        a_c, _ = gc.predict(obs, episode_start=first)
+        on = float(r(obs, "fish_heave_rate")) * float(r(obs, "comp_stroke_vel")) > 0.0
+        guarded = AC.stop_guard_mask(gc.reader, obs[None], gc.stop_guard)[0]
+        if on and not guarded:
+            n_on += 1
+            np.testing.assert_allclose(a_c, np.clip(a_sky, -1, 1), rtol=0, atol=1e-6)
+        elif not guarded:
             n_off += 1
             np.testing.assert_allclose(a_c, a_h1, rtol=0, atol=1e-6)
         obs, _r, term, trunc, _ = env.step(a_c)

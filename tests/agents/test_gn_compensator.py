@@ -120,6 +120,13 @@ def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
     assert gnc.free_mask("hst", "gated").sum() == arc.N_ACT * 45
     with pytest.raises(ValueError, match="free='cable' needs"):
         gnc.free_mask("hs", "cable")
+    fish = gnc.free_mask("hsf", "fish")                 # hsf: only the fish-gated copy moves
+    hsf_names = arc.feature_names("hsf")
+    assert fish.sum() == arc.N_ACT * 45 and all(
+        hsf_names[i % len(hsf_names)].startswith(arc.FISH_GATE_PREFIX) == bool(m) for i, m in enumerate(fish))
+    assert gnc.free_mask("hsf", "gated").sum() == arc.N_ACT * 45
+    with pytest.raises(ValueError, match="free='fish' needs"):
+        gnc.free_mask("hst", "fish")
     with pytest.raises(ValueError, match="needs a predictor"):
         gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
@@ -496,3 +503,26 @@ def test_rerun_chain_files_carry_the_gns_recipe(seed):
     assert [r[0] for r in runs] == ["arsp_CompensatorGains-v0_s0", f"gnp_CompensatorGains-v0_s{seed}",
                                     f"gnsp_CompensatorGains-v0_s{seed}"]
     assert sum(r[2] for r in runs) == 63_720_000
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_fish_gated_policies_carry_their_recipe_and_act(seed):
+    """The compensator headline since 2026-12-06 night (``gnsf``, feature set hsf, docs/agents.md "A second gate") is
+    package data: its recipe recorded (iterations from 10 on, 2 replicates, ridges 0.01…100, only the fish-gated copy's
+    weights moved, from the ``gns`` file of the same seed, its stop guard 0.9), every ``gns`` weight kept exactly (the
+    ungated and the skyhook-gated copies), some fish-gated weights moved, and it acts inside the action box, not as
+    ``gns`` does."""
+    import agents
+    base = Path(agents.__file__).parent / "trained"
+    pol = arc.load_policy(base / f"gnsf_CompensatorGains-v0_s{seed}.npz")
+    init = arc.load_policy(base / f"gns_CompensatorGains-v0_s{seed}.npz")
+    hp = pol.meta["hyperparameters"]
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == "hsf"
+    assert pol.meta["first_iteration"] == 10 and pol.meta["iterations"] >= 1
+    assert (hp["replicates"], hp["ridges"], hp["init"], hp["free"]) == (
+        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"gns_CompensatorGains-v0_s{seed}", "fish")
+    n_hs = arc.n_features("hs")
+    assert all(np.array_equal(pol.theta[k][:, :n_hs], init.theta[k]) for k in init.theta)
+    assert any(np.any(pol.theta[k][:, n_hs:] != 0.0) for k in pol.theta)
+    assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
+    _assert_acts_in_box_and_unlike(pol, init)
