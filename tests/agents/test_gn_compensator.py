@@ -505,22 +505,23 @@ def test_rerun_chain_files_carry_the_gns_recipe(seed):
     assert sum(r[2] for r in runs) == 63_720_000
 
 
+@pytest.mark.parametrize("family, parent", [("gnsf", "gns"), ("gnspf", "gnsp")])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_fish_gated_policies_carry_their_recipe_and_act(seed):
-    """The compensator headline since 2026-12-06 night (``gnsf``, feature set hsf, docs/agents.md "A second gate") is
-    package data: its recipe recorded (iterations from 10 on, 2 replicates, ridges 0.01…100, only the fish-gated copy's
-    weights moved, from the ``gns`` file of the same seed, its stop guard 0.9), every ``gns`` weight kept exactly (the
-    ungated and the skyhook-gated copies), some fish-gated weights moved, and it acts inside the action box, not as
-    ``gns`` does."""
+def test_fish_gated_policies_carry_their_recipe_and_act(seed, family, parent):
+    """The compensator headline since 2026-12-06 night (``gnsf``, feature set hsf, docs/agents.md "A second gate") and
+    the one-hour recipe's fish-gated stage (``gnspf``, from ``gnsp``) are package data: the recipe recorded (iterations
+    from 10 on, 2 replicates, ridges 0.01…100, only the fish-gated copy's weights moved, from the parent file of the
+    same seed, its stop guard 0.9), every parent weight kept exactly (the ungated and the skyhook-gated copies), some
+    fish-gated weights moved, and the policy acts inside the action box, not as its parent does."""
     import agents
     base = Path(agents.__file__).parent / "trained"
-    pol = arc.load_policy(base / f"gnsf_CompensatorGains-v0_s{seed}.npz")
-    init = arc.load_policy(base / f"gns_CompensatorGains-v0_s{seed}.npz")
+    pol = arc.load_policy(base / f"{family}_CompensatorGains-v0_s{seed}.npz")
+    init = arc.load_policy(base / f"{parent}_CompensatorGains-v0_s{seed}.npz")
     hp = pol.meta["hyperparameters"]
     assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == "hsf"
     assert pol.meta["first_iteration"] == 10 and pol.meta["iterations"] >= 1
     assert (hp["replicates"], hp["ridges"], hp["init"], hp["free"]) == (
-        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"gns_CompensatorGains-v0_s{seed}", "fish")
+        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"{parent}_CompensatorGains-v0_s{seed}", "fish")
     n_hs = arc.n_features("hs")
     assert all(np.array_equal(pol.theta[k][:, :n_hs], init.theta[k]) for k in init.theta)
     assert any(np.any(pol.theta[k][:, n_hs:] != 0.0) for k in pol.theta)
