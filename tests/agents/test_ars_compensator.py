@@ -393,22 +393,21 @@ def test_committed_policies_ship_load_and_act(env, seed):
     assert not np.allclose(acts[0], sky[0], atol=1e-3)
 
 
-def test_gated_feature_set_switches_with_skyhook(env):
-    """hs = h + every h feature times skyhook's switching state. Independently of the feature code: with the gated
-    weights at 0 the policy acts as its h policy (to round-off), and with gated weights = −(the h weights) the
-    residual vanishes exactly on the steps where skyhook damps (ż_abs·ṡ > 0 and |ṡ| > 1e-6, computed here in float64
-    from the observation) — the action is then skyhook's — and is the h policy's on the others."""
+def _skyhook_damps(r, obs) -> bool:
+    """Skyhook's switching condition, computed here in float64 from the observation (ż_abs·ṡ > 0 and |ṡ| > 1e-6)."""
+    sd = float(r(obs, "comp_stroke_vel"))
+    return (float(r(obs, "tow_vel_z")) + sd) * sd > 0.0 and abs(sd) > 1e-6
+
+
+def _fish_on(r, obs) -> bool:
+    """The fish's switching condition, computed here in float64 from the observation (heave rate · ṡ > 0)."""
+    return float(r(obs, "fish_heave_rate")) * float(r(obs, "comp_stroke_vel")) > 0.0
+
+
+def _assert_gate_switches(env, gc, h, sea, seed, on_of):
+    """``gc`` = the h policy ``h`` with one gated copy's weights = −(h's): on 200 steps its action is skyhook's where
+    ``on_of(reader, obs)`` holds and ``h``'s elsewhere (1e-6), and both phases occur (> 20 steps each)."""
     from agents.classical import SkyhookCompensator
-    names, hs_names = AC.feature_names("h"), AC.feature_names("hs")
-    assert hs_names[:len(names)] == names and hs_names[len(names):] == [AC.GATE_PREFIX + n for n in names]
-    h = _policy(scale=0.05, seed=8)
-    zero = {k: np.concatenate([v, np.zeros_like(v)], axis=1) for k, v in h.theta.items()}
-    cancel = {k: np.concatenate([v, -v], axis=1) for k, v in h.theta.items()}
-    g0 = AC.ARSCompensatorPolicy(zero, h.base_table, meta={"feature_set": "hs"})
-    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hs"})
-    sea, seed = env.unwrapped.eval_sea_states()[8]
-    a_h = _actions(env, h.bind_env(env), sea, seed, 200)
-    np.testing.assert_allclose(_actions(env, g0.bind_env(env), sea, seed, 200), a_h, rtol=0, atol=1e-6)
     gc.bind_env(env)
     sky = SkyhookCompensator(env, table=h.base_table)
     h.bind_env(env)
@@ -422,9 +421,7 @@ def test_gated_feature_set_switches_with_skyhook(env):
         a_sky = np.asarray(sky.act(np.asarray(obs, float)), np.float32)
         a_h1, _ = h.predict(obs, episode_start=first)
         a_c, _ = gc.predict(obs, episode_start=first)
-        sd = float(r(obs, "comp_stroke_vel"))
-        on = (float(r(obs, "tow_vel_z")) + sd) * sd > 0.0 and abs(sd) > 1e-6
-        if on:
+        if on_of(r, obs):
             n_on += 1
             np.testing.assert_allclose(a_c, np.clip(a_sky, -1, 1), rtol=0, atol=1e-6)
         else:
@@ -435,13 +432,30 @@ def test_gated_feature_set_switches_with_skyhook(env):
     assert n_on > 20 and n_off > 20                     # both phases were exercised
 
 
+def test_gated_feature_set_switches_with_skyhook(env):
+    """hs = h + every h feature times skyhook's switching state. Independently of the feature code: with the gated
+    weights at 0 the policy acts as its h policy (to round-off), and with gated weights = −(the h weights) the
+    residual vanishes exactly on the steps where skyhook damps (ż_abs·ṡ > 0 and |ṡ| > 1e-6, computed here in float64
+    from the observation) — the action is then skyhook's — and is the h policy's on the others."""
+    names, hs_names = AC.feature_names("h"), AC.feature_names("hs")
+    assert hs_names[:len(names)] == names and hs_names[len(names):] == [AC.GATE_PREFIX + n for n in names]
+    h = _policy(scale=0.05, seed=8)
+    zero = {k: np.concatenate([v, np.zeros_like(v)], axis=1) for k, v in h.theta.items()}
+    cancel = {k: np.concatenate([v, -v], axis=1) for k, v in h.theta.items()}
+    g0 = AC.ARSCompensatorPolicy(zero, h.base_table, meta={"feature_set": "hs"})
+    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hs"})
+    sea, seed = env.unwrapped.eval_sea_states()[8]
+    a_h = _actions(env, h.bind_env(env), sea, seed, 200)
+    np.testing.assert_allclose(_actions(env, g0.bind_env(env), sea, seed, 200), a_h, rtol=0, atol=1e-6)
+    _assert_gate_switches(env, gc, h, sea, seed, _skyhook_damps)
+
+
 def test_fish_gated_feature_set_switches_with_the_fish(env):
     """hsf = hs + every h feature times the fish's switching state (fish heave rate and stroke velocity of one sign).
     Independently of the feature code: with the fish-gated weights at 0 the policy acts as its hs policy (to
     round-off), and with fish-gated weights = −(the h weights) and no skyhook-gated weights the residual vanishes
     exactly on the steps where the fish's heave rate times the stroke velocity (read here in float64 from the
     observation) is positive — the action is then skyhook's — and is the h policy's on the others."""
-    from agents.classical import SkyhookCompensator
     names, hs_names, hsf = AC.feature_names("h"), AC.feature_names("hs"), AC.feature_names("hsf")
     assert hsf == hs_names + [AC.FISH_GATE_PREFIX + n for n in names] and len(hsf) == 135
     assert AC.added_features("hsf", "fish")[1].sum() == 45 and AC.added_features("hsf", "gated")[1].sum() == 45
@@ -454,30 +468,8 @@ def test_fish_gated_feature_set_switches_with_the_fish(env):
     a_hs = _actions(env, hs.bind_env(env), sea, seed, 200)
     np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 200), a_hs, rtol=0, atol=1e-6)
     cancel = {k: np.concatenate([v, np.zeros_like(v), -v], axis=1) for k, v in h.theta.items()}
-    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsf"}).bind_env(env)
-    sky = SkyhookCompensator(env, table=h.base_table)
-    h.bind_env(env)
-    r = gc.reader
-    obs, _ = env.reset(seed=seed, options={"sea_state": sea, "sea_seed": seed})
-    n_on = n_off = 0
-    for k in range(200):
-        first = np.array([k == 0])
-        if k == 0:
-            sky.reset()
-        a_sky = np.asarray(sky.act(np.asarray(obs, float)), np.float32)
-        a_h1, _ = h.predict(obs, episode_start=first)
-        a_c, _ = gc.predict(obs, episode_start=first)
-        on = float(r(obs, "fish_heave_rate")) * float(r(obs, "comp_stroke_vel")) > 0.0
-        guarded = AC.stop_guard_mask(gc.reader, obs[None], gc.stop_guard)[0]
-        if on and not guarded:
-            n_on += 1
-            np.testing.assert_allclose(a_c, np.clip(a_sky, -1, 1), rtol=0, atol=1e-6)
-        elif not guarded:
-            n_off += 1
-            np.testing.assert_allclose(a_c, a_h1, rtol=0, atol=1e-6)
-        obs, _r, term, trunc, _ = env.step(a_c)
-        assert not (term or trunc)
-    assert n_on > 20 and n_off > 20                     # both phases were exercised
+    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsf"})
+    _assert_gate_switches(env, gc, h, sea, seed, _fish_on)
 
 
 def test_cable_feature_set_reads_tension_and_along_cable_velocity(env):
