@@ -29,7 +29,9 @@ feature (the constant included) multiplied by skyhook's switching state (1 while
 set ``"hst"`` adds to "hs" the cable's state at the sheave, ungated: the top tension's deviation from its static value
 and the tow point's velocity along the top cable at the same lags (112 features; :data:`CABLE_CHANNELS`). Feature set
 ``"hsf"`` adds to "hs" a second gated copy of every "h" feature, multiplied by the *fish's* switching state (1 while the
-fish's heave rate and the stroke velocity have one sign, :func:`fish_on`; 135 features).
+fish's heave rate and the stroke velocity have one sign, :func:`fish_on`; 135 features). Feature set ``"hsfo"`` adds to
+"hsf" a third gated copy, multiplied by the stroke's direction of travel: 1 while the stroke moves *outward*, towards
+the nearer end stop (stroke and stroke velocity of one sign, :func:`outward_on`; 180 features).
 
 Θ = 0 is the skyhook law exactly. The policy is causal: it acts on the observation vector and its own memory of
 earlier observations, plus the sea-state estimate at episode start (as the base does).
@@ -81,7 +83,7 @@ from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, pus
 from .predictor import feature_names as predicted_names
 
 __all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "FISH_GATED", "FISH_GATE_PREFIX",
-           "fish_on", "CABLE", "CABLE_CHANNELS",
+           "fish_on", "OUTWARD_GATED", "OUTWARD_GATE_PREFIX", "outward_on", "CABLE", "CABLE_CHANNELS",
            "CABLE_OFFSETS", "ADDED_KINDS", "added_features",
            "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
@@ -127,13 +129,13 @@ N_ACT = 2
 #: predicted by the policy's own causal linear predictor from the last 10 s of the MRU's vertical motion
 #: (``agents/predictor.py``, :data:`agents.predictor.COMP_PRED_CHANNELS`, stored in the policy file), scaled as the
 #: channel's history features, placed before the constant
-FEATURE_SETS = ("h", "hq", "hs", "hst", "hsf")
+FEATURE_SETS = ("h", "hq", "hs", "hst", "hsf", "hsfo")
 PREDICTED = frozenset({"hq"})
 #: feature set "hs" = "h" + every "h" feature (the constant included) multiplied by skyhook's switching state
 #: ``on`` = 1 while the sheave's absolute velocity has the stroke velocity's sign (skyhook damps; the same condition
 #: as the base law, read from the same observation), else 0: a residual with separate weights for the damping-on and
 #: damping-off phases (90 features; the gated names are prefixed ``on*``)
-GATED = frozenset({"hs", "hst", "hsf"})
+GATED = frozenset({"hs", "hst", "hsf", "hsfo"})
 GATE_PREFIX = "on*"
 #: feature set "hsf" = "hs" + a second copy of every "h" feature multiplied by the *fish's* switching state
 #: ``fish_on`` = 1 while the fish's heave rate and the stroke velocity have the same sign, else 0 (:func:`fish_on`):
@@ -142,8 +144,15 @@ GATE_PREFIX = "on*"
 #: motion, the switching condition of a semi-active law aimed at the fish (135 features; the names prefixed
 #: ``fish*``; after the skyhook-gated copy). Either sign convention gives the same class: the ungated weights cover
 #: the other phase
-FISH_GATED = frozenset({"hsf"})
+FISH_GATED = frozenset({"hsf", "hsfo"})
 FISH_GATE_PREFIX = "fish*"
+#: feature set "hsfo" = "hsf" + a third copy of every "h" feature multiplied by the stroke's direction of travel
+#: ``outward_on`` = 1 while the stroke moves away from mid-stroke, towards the nearer end stop (the stroke and its
+#: velocity have one sign), else 0 (:func:`outward_on`): separate weights for the half cycle in which the spring
+#: stores energy and the stop comes nearer and the half cycle in which it gives the energy back (180 features; the
+#: names prefixed ``out*``; after the fish-gated copy)
+OUTWARD_GATED = frozenset({"hsfo"})
+OUTWARD_GATE_PREFIX = "out*"
 #: feature set "hst" = "hs" + the cable's state at the sheave: the top tension's deviation from its static value
 #: (``top_tension`` − 1, in units of the static top tension) and the tow point's velocity along the top cable
 #: (``tow_vel_along``, m/s) at the lags :data:`LAG_STEPS`, ungated, after the gated copy (112 features). Under
@@ -156,7 +165,7 @@ CABLE_CHANNELS = ("top_tension", "tow_vel_along")
 #: the value subtracted from a cable channel before scaling (the static top tension is 1 in its channel's units)
 CABLE_OFFSETS = {"top_tension": 1.0, "tow_vel_along": 0.0}
 #: the kinds of features a feature set adds to "h", and the sets that add them (a set adding two kinds lists both)
-ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED, "cable": CABLE, "fish": FISH_GATED}
+ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED, "cable": CABLE, "fish": FISH_GATED, "outward": OUTWARD_GATED}
 
 
 def feature_names(feature_set: str = "h") -> list[str]:
@@ -172,6 +181,8 @@ def feature_names(feature_set: str = "h") -> list[str]:
         names += [GATE_PREFIX + nm for nm in base]
     if feature_set in FISH_GATED:
         names += [FISH_GATE_PREFIX + nm for nm in base]
+    if feature_set in OUTWARD_GATED:
+        names += [OUTWARD_GATE_PREFIX + nm for nm in base]
     if feature_set in CABLE:
         names += [f"{c}@-{lag / 10:.1f}s" for c in CABLE_CHANNELS for lag in LAG_STEPS]
     return names
@@ -198,6 +209,8 @@ def added_features(feature_set: str, kind: str | None = None) -> tuple[str, np.n
         return "gated", np.array([nm.startswith(GATE_PREFIX) for nm in names])
     if kind == "fish":
         return "fish", np.array([nm.startswith(FISH_GATE_PREFIX) for nm in names])
+    if kind == "outward":
+        return "outward", np.array([nm.startswith(OUTWARD_GATE_PREFIX) for nm in names])
     if kind == "cable":
         n_cable = len(CABLE_CHANNELS) * len(LAG_STEPS)
         return "cable", np.arange(len(names)) >= len(names) - n_cable
@@ -230,11 +243,12 @@ class _Features:
     policy uses it with n = 1, so training and deployment share one arithmetic."""
 
     def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gated: bool = False,
-                 cable: bool = False, fish_gated: bool = False):
+                 cable: bool = False, fish_gated: bool = False, outward_gated: bool = False):
         self.reader = reader
         self.half = float(half_stroke)
         self.gated = bool(gated)
         self.fish_gated = bool(fish_gated)
+        self.outward_gated = bool(outward_gated)
         self.cable = bool(cable)
         self.chist = None                   # the cable channels' history ring (n, channels, N_HISTORY), newest first
         self.scales = dict(scales)
@@ -275,6 +289,8 @@ class _Features:
             phi = np.concatenate([phi, base * skyhook_on(r, obs)[:, None]], axis=1)
         if self.fish_gated:
             phi = np.concatenate([phi, base * fish_on(r, obs)[:, None]], axis=1)
+        if self.outward_gated:
+            phi = np.concatenate([phi, base * outward_on(r, obs)[:, None]], axis=1)
         if self.cable:
             c = np.stack([(r.batch(obs, ch) - CABLE_OFFSETS[ch]) / sc[ch] for ch in CABLE_CHANNELS], axis=1)
             if first or self.chist is None:
@@ -299,6 +315,13 @@ def fish_on(reader, obs):
     """The fish's switching state per row of a batch of observations (feature set "hsf"): 1.0 where the fish's heave
     rate (``fish_heave_rate``) and the stroke velocity (``comp_stroke_vel``) have the same sign, else 0.0."""
     return (reader.batch(obs, "fish_heave_rate") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
+
+
+def outward_on(reader, obs):
+    """The stroke's direction of travel per row of a batch of observations (feature set "hsfo"): 1.0 where the stroke
+    (``comp_stroke``) and the stroke velocity (``comp_stroke_vel``) have the same sign — the stroke moves towards the
+    nearer end stop —, else 0.0."""
+    return (reader.batch(obs, "comp_stroke") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
 
 
 def _residual(theta, phi):
@@ -399,7 +422,8 @@ class ARSCompensatorPolicy:
         self.u = env.unwrapped
         self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor,
                                 gated=self.feature_set in GATED, cable=self.feature_set in CABLE,
-                                fish_gated=self.feature_set in FISH_GATED)
+                                fish_gated=self.feature_set in FISH_GATED,
+                                outward_gated=self.feature_set in OUTWARD_GATED)
         self._th = None
         return self
 
@@ -452,7 +476,8 @@ class _Batch:
         self.table = base_table
         self.feature_set = feature_set
         self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gated=feature_set in GATED,
-                                  cable=feature_set in CABLE, fish_gated=feature_set in FISH_GATED)
+                                  cable=feature_set in CABLE, fish_gated=feature_set in FISH_GATED,
+                                  outward_gated=feature_set in OUTWARD_GATED)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS

@@ -70,8 +70,8 @@ def initial_theta(init, keys, feature_set: str) -> np.ndarray:
 def free_mask(feature_set: str, free: str) -> np.ndarray:
     """Which of the (2, n_features) weights the search moves: ``"all"``, or only the features a feature set adds to
     "h" (:func:`agents.ars_compensator.added_features`): ``"predicted"`` (hq), ``"gated"`` (hs, hst, hsf), ``"cable"`` (hst:
-    the top-tension and along-cable velocity histories) or ``"fish"`` (hsf: the fish-gated copy); the rest stay as
-    they start. A flat boolean mask over the 2 × n_features weights (row-major, as Θ.reshape(-1))."""
+    the top-tension and along-cable velocity histories), ``"fish"`` (hsf, hsfo: the fish-gated copy) or ``"outward"``
+    (hsfo: the outward-gated copy); the rest stay as they start. A flat boolean mask over the 2 × n_features weights (row-major, as Θ.reshape(-1))."""
     if free == "all":
         cols = np.ones(arc.n_features(feature_set), bool)
     elif free in arc.ADDED_KINDS:
@@ -274,13 +274,15 @@ def main(argv=None) -> int:
                          "and needs --predictor (or an hq init); hs adds every h feature gated by skyhook's "
                          "switching state; hst adds to hs the top tension and along-cable velocity over the last 2 s; hsf adds to "
                          "hs every h feature gated by the fish's switching state (fish heave rate and stroke "
-                         "velocity of one sign)")
+                         "velocity of one sign); hsfo adds to hsf every h feature gated by the stroke's direction "
+                         "(outward, towards the nearer end stop)")
     ap.add_argument("--predictor", default=None, help="predictor file of feature set hq (python -m agents.predictor "
                                                       "--env towenv/CompensatorGains-v0 --out FILE)")
     ap.add_argument("--free", default="all", choices=("all",) + tuple(arc.ADDED_KINDS),
                     help="which weights the search moves: all (default), only the predicted features' (hq), only "
                          "the skyhook-gated copy's (hs, hst, hsf), only the cable features' (hst: top tension and "
-                         "along-cable velocity histories), or only the fish-gated copy's (hsf)")
+                         "along-cable velocity histories), only the fish-gated copy's (hsf, hsfo), or only the "
+                         "outward-gated copy's (hsfo)")
     ap.add_argument("--entries", type=int, nargs="+", default=None,
                     help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
     add_parallel_flag(ap)

@@ -73,7 +73,7 @@ def test_zero_weights_are_the_skyhook_law(env):
         assert np.array_equal(a.data[k], b.data[k]), k
 
 
-@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst", "hsf"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst", "hsf", "hsfo"])
 def test_single_env_policy_equals_the_batched_training_rollout(env, fs):
     """The policy trained on the vector env is the one evaluated on single envs: same actions (1e-9), same σ, the
     same end-stop hits and the same stroke-margin term (from the ``comp_stroke`` observation, which is the true
@@ -169,7 +169,7 @@ def test_stop_guard_acts_exactly_where_its_condition_holds(env):
         AC.ARSCompensatorPolicy({}, table, meta={"stop_guard": 1.5})
 
 
-@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst", "hsf"])
+@pytest.mark.parametrize("fs", ["h", "hq", "hs", "hst", "hsf", "hsfo"])
 def test_policy_is_causal(env, fs):
     """Actions depend only on the observations handed to predict() (and the sea-state estimate): a replay of the
     recorded observations to a fresh policy bound to an env in an unrelated state gives the same actions, and
@@ -470,6 +470,35 @@ def test_fish_gated_feature_set_switches_with_the_fish(env):
     cancel = {k: np.concatenate([v, np.zeros_like(v), -v], axis=1) for k, v in h.theta.items()}
     gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsf"})
     _assert_gate_switches(env, gc, h, sea, seed, _fish_on)
+
+
+def _outward_on(r, obs) -> bool:
+    """The stroke's outward condition, computed here in float64 from the observation (stroke · ṡ > 0)."""
+    return float(r(obs, "comp_stroke")) * float(r(obs, "comp_stroke_vel")) > 0.0
+
+
+def test_outward_gated_feature_set_switches_with_the_stroke_direction(env):
+    """hsfo = hsf + every h feature times the stroke's direction of travel (stroke and stroke velocity of one sign:
+    moving towards the nearer end stop). Independently of the feature code: with the outward-gated weights at 0 the
+    policy acts as its hsf policy (to round-off), and with outward-gated weights = −(the h weights) and no other
+    gated weights the residual vanishes exactly on the steps where stroke times stroke velocity (read here in
+    float64 from the observation) is positive — the action is then skyhook's — and is the h policy's on the
+    others."""
+    names, hsf, hsfo = AC.feature_names("h"), AC.feature_names("hsf"), AC.feature_names("hsfo")
+    assert hsfo == hsf + [AC.OUTWARD_GATE_PREFIX + n for n in names] and len(hsfo) == 180
+    for kind in ("outward", "fish", "gated"):
+        assert AC.added_features("hsfo", kind)[1].sum() == 45
+    assert not AC.added_features("hsf", "outward")[1].any()
+    h = _policy(scale=0.05, seed=8)
+    hsfp = _policy(scale=0.02, seed=10, fs="hsf")
+    zero = {k: np.concatenate([v, np.zeros((AC.N_ACT, 45))], axis=1) for k, v in hsfp.theta.items()}
+    p0 = AC.ARSCompensatorPolicy(zero, hsfp.base_table, meta={"feature_set": "hsfo"})
+    sea, seed = env.unwrapped.eval_sea_states()[8]
+    a_hsf = _actions(env, hsfp.bind_env(env), sea, seed, 200)
+    np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 200), a_hsf, rtol=0, atol=1e-6)
+    cancel = {k: np.concatenate([v, np.zeros_like(v), np.zeros_like(v), -v], axis=1) for k, v in h.theta.items()}
+    gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsfo"})
+    _assert_gate_switches(env, gc, h, sea, seed, _outward_on)
 
 
 def test_cable_feature_set_reads_tension_and_along_cable_velocity(env):

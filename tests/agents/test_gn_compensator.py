@@ -127,6 +127,13 @@ def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
     assert gnc.free_mask("hsf", "gated").sum() == arc.N_ACT * 45
     with pytest.raises(ValueError, match="free='fish' needs"):
         gnc.free_mask("hst", "fish")
+    outward = gnc.free_mask("hsfo", "outward")          # hsfo: only the outward-gated copy moves
+    hsfo_names = arc.feature_names("hsfo")
+    assert outward.sum() == arc.N_ACT * 45 and all(
+        hsfo_names[i % len(hsfo_names)].startswith(arc.OUTWARD_GATE_PREFIX) == bool(m) for i, m in enumerate(outward))
+    assert gnc.free_mask("hsfo", "fish").sum() == arc.N_ACT * 45
+    with pytest.raises(ValueError, match="free='outward' needs"):
+        gnc.free_mask("hsf", "outward")
     with pytest.raises(ValueError, match="needs a predictor"):
         gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
@@ -505,25 +512,29 @@ def test_rerun_chain_files_carry_the_gns_recipe(seed):
     assert sum(r[2] for r in runs) == 63_720_000
 
 
-@pytest.mark.parametrize("family, parent", [("gnsf", "gns"), ("gnspf", "gnsp")])
+@pytest.mark.parametrize("family, parent, fs, free", [("gnsf", "gns", "hsf", "fish"), ("gnspf", "gnsp", "hsf", "fish"),
+                                                      ("gnsfo", "gnsf", "hsfo", "outward")])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_fish_gated_policies_carry_their_recipe_and_act(seed, family, parent):
-    """The compensator headline since 2026-12-06 night (``gnsf``, feature set hsf, docs/agents.md "A second gate") and
-    the one-hour recipe's fish-gated stage (``gnspf``, from ``gnsp``) are package data: the recipe recorded (iterations
-    from 10 on, 2 replicates, ridges 0.01…100, only the fish-gated copy's weights moved, from the parent file of the
-    same seed, its stop guard 0.9), every parent weight kept exactly (the ungated and the skyhook-gated copies), some
-    fish-gated weights moved, and the policy acts inside the action box, not as its parent does."""
+def test_gated_continuations_carry_their_recipe_and_act(seed, family, parent, fs, free):
+    """The compensator headline since 2026-12-07 (``gnsfo``, feature set hsfo, docs/agents.md "A third gate"), the one
+    before it (``gnsf``, hsf, "A second gate") and the one-hour recipe's fish-gated stage (``gnspf``, from ``gnsp``) are
+    package data: the recipe recorded (the parent's iteration count continued, 2 replicates, ridges 0.01…100, only
+    the newest gated copy's weights moved, from the parent file of the same seed, its stop guard 0.9), every parent
+    weight kept exactly, some new weights moved, and the policy acts inside the action box, not as its parent does."""
     import agents
     base = Path(agents.__file__).parent / "trained"
     pol = arc.load_policy(base / f"{family}_CompensatorGains-v0_s{seed}.npz")
     init = arc.load_policy(base / f"{parent}_CompensatorGains-v0_s{seed}.npz")
     hp = pol.meta["hyperparameters"]
-    assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == "hsf"
-    assert pol.meta["first_iteration"] == 10 and pol.meta["iterations"] >= 1
+    assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == fs
+    assert pol.meta["first_iteration"] == init.meta["first_iteration"] + init.meta["iterations"]
+    assert pol.meta["iterations"] >= 1
     assert (hp["replicates"], hp["ridges"], hp["init"], hp["free"]) == (
-        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"{parent}_CompensatorGains-v0_s{seed}", "fish")
-    n_hs = arc.n_features("hs")
-    assert all(np.array_equal(pol.theta[k][:, :n_hs], init.theta[k]) for k in init.theta)
-    assert any(np.any(pol.theta[k][:, n_hs:] != 0.0) for k in pol.theta)
+        2, [0.01, 0.1, 1.0, 10.0, 100.0], f"{parent}_CompensatorGains-v0_s{seed}", free)
+    n_parent = arc.n_features(init.feature_set)
+    assert arc.feature_names(fs)[:n_parent] == arc.feature_names(init.feature_set)
+    assert np.array_equal(gnc.free_mask(fs, free).reshape(arc.N_ACT, -1)[0], np.arange(arc.n_features(fs)) >= n_parent)
+    assert all(np.array_equal(pol.theta[k][:, :n_parent], init.theta[k]) for k in init.theta)
+    assert any(np.any(pol.theta[k][:, n_parent:] != 0.0) for k in pol.theta)
     assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
     _assert_acts_in_box_and_unlike(pol, init)
