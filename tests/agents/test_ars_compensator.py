@@ -450,6 +450,15 @@ def test_gated_feature_set_switches_with_skyhook(env):
     _assert_gate_switches(env, gc, h, sea, seed, _skyhook_damps)
 
 
+def _assert_new_copy_at_zero_acts_as_parent(env, parent, fs, sea, seed):
+    """``parent`` with the 45 weights of feature set ``fs``'s newest gated copy appended at 0 acts as ``parent`` on
+    200 steps (to round-off)."""
+    zero = {k: np.concatenate([v, np.zeros((AC.N_ACT, 45))], axis=1) for k, v in parent.theta.items()}
+    p0 = AC.ARSCompensatorPolicy(zero, parent.base_table, meta={"feature_set": fs})
+    a_parent = _actions(env, parent.bind_env(env), sea, seed, 200)
+    np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 200), a_parent, rtol=0, atol=1e-6)
+
+
 def test_fish_gated_feature_set_switches_with_the_fish(env):
     """hsf = hs + every h feature times the fish's switching state (fish heave rate and stroke velocity of one sign).
     Independently of the feature code: with the fish-gated weights at 0 the policy acts as its hs policy (to
@@ -461,12 +470,8 @@ def test_fish_gated_feature_set_switches_with_the_fish(env):
     assert AC.added_features("hsf", "fish")[1].sum() == 45 and AC.added_features("hsf", "gated")[1].sum() == 45
     assert not AC.added_features("hs", "fish")[1].any() and not AC.added_features("hst", "fish")[1].any()
     h = _policy(scale=0.05, seed=8)
-    hs = _policy(scale=0.03, seed=9, fs="hs")
-    zero = {k: np.concatenate([v, np.zeros((AC.N_ACT, 45))], axis=1) for k, v in hs.theta.items()}
-    p0 = AC.ARSCompensatorPolicy(zero, hs.base_table, meta={"feature_set": "hsf"})
     sea, seed = env.unwrapped.eval_sea_states()[8]
-    a_hs = _actions(env, hs.bind_env(env), sea, seed, 200)
-    np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 200), a_hs, rtol=0, atol=1e-6)
+    _assert_new_copy_at_zero_acts_as_parent(env, _policy(scale=0.03, seed=9, fs="hs"), "hsf", sea, seed)
     cancel = {k: np.concatenate([v, np.zeros_like(v), -v], axis=1) for k, v in h.theta.items()}
     gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsf"})
     _assert_gate_switches(env, gc, h, sea, seed, _fish_on)
@@ -490,12 +495,8 @@ def test_outward_gated_feature_set_switches_with_the_stroke_direction(env):
         assert AC.added_features("hsfo", kind)[1].sum() == 45
     assert not AC.added_features("hsf", "outward")[1].any()
     h = _policy(scale=0.05, seed=8)
-    hsfp = _policy(scale=0.02, seed=10, fs="hsf")
-    zero = {k: np.concatenate([v, np.zeros((AC.N_ACT, 45))], axis=1) for k, v in hsfp.theta.items()}
-    p0 = AC.ARSCompensatorPolicy(zero, hsfp.base_table, meta={"feature_set": "hsfo"})
     sea, seed = env.unwrapped.eval_sea_states()[8]
-    a_hsf = _actions(env, hsfp.bind_env(env), sea, seed, 200)
-    np.testing.assert_allclose(_actions(env, p0.bind_env(env), sea, seed, 200), a_hsf, rtol=0, atol=1e-6)
+    _assert_new_copy_at_zero_acts_as_parent(env, _policy(scale=0.02, seed=10, fs="hsf"), "hsfo", sea, seed)
     cancel = {k: np.concatenate([v, np.zeros_like(v), np.zeros_like(v), -v], axis=1) for k, v in h.theta.items()}
     gc = AC.ARSCompensatorPolicy(cancel, h.base_table, meta={"feature_set": "hsfo"})
     _assert_gate_switches(env, gc, h, sea, seed, _outward_on)

@@ -120,20 +120,16 @@ def test_predicted_features_start_at_zero_and_free_predicted_moves_only_them():
     assert gnc.free_mask("hst", "gated").sum() == arc.N_ACT * 45
     with pytest.raises(ValueError, match="free='cable' needs"):
         gnc.free_mask("hs", "cable")
-    fish = gnc.free_mask("hsf", "fish")                 # hsf: only the fish-gated copy moves
-    hsf_names = arc.feature_names("hsf")
-    assert fish.sum() == arc.N_ACT * 45 and all(
-        hsf_names[i % len(hsf_names)].startswith(arc.FISH_GATE_PREFIX) == bool(m) for i, m in enumerate(fish))
-    assert gnc.free_mask("hsf", "gated").sum() == arc.N_ACT * 45
-    with pytest.raises(ValueError, match="free='fish' needs"):
-        gnc.free_mask("hst", "fish")
-    outward = gnc.free_mask("hsfo", "outward")          # hsfo: only the outward-gated copy moves
-    hsfo_names = arc.feature_names("hsfo")
-    assert outward.sum() == arc.N_ACT * 45 and all(
-        hsfo_names[i % len(hsfo_names)].startswith(arc.OUTWARD_GATE_PREFIX) == bool(m) for i, m in enumerate(outward))
-    assert gnc.free_mask("hsfo", "fish").sum() == arc.N_ACT * 45
-    with pytest.raises(ValueError, match="free='outward' needs"):
-        gnc.free_mask("hsf", "outward")
+    # hsf: only the fish-gated copy moves; hsfo: only the outward-gated copy (or the fish-gated one) moves
+    for fs, free, prefix, other, lacking in (("hsf", "fish", arc.FISH_GATE_PREFIX, "gated", "hst"),
+                                              ("hsfo", "outward", arc.OUTWARD_GATE_PREFIX, "fish", "hsf")):
+        mask = gnc.free_mask(fs, free)
+        names = arc.feature_names(fs)
+        assert mask.sum() == arc.N_ACT * 45 and all(
+            names[i % len(names)].startswith(prefix) == bool(m) for i, m in enumerate(mask))
+        assert gnc.free_mask(fs, other).sum() == arc.N_ACT * 45
+        with pytest.raises(ValueError, match=f"free='{free}' needs"):
+            gnc.free_mask(lacking, free)
     with pytest.raises(ValueError, match="needs a predictor"):
         gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, feature_set="hq", progress=False)
 
