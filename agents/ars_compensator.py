@@ -83,7 +83,7 @@ from .predictor import COMP_PRED_CHANNELS, check_channels, from_policy_file, pus
 from .predictor import feature_names as predicted_names
 
 __all__ = ["ARSCompensatorPolicy", "FEATURE_SETS", "PREDICTED", "GATED", "GATE_PREFIX", "FISH_GATED", "FISH_GATE_PREFIX",
-           "fish_on", "OUTWARD_GATED", "OUTWARD_GATE_PREFIX", "outward_on", "CABLE", "CABLE_CHANNELS",
+           "fish_on", "OUTWARD_GATED", "OUTWARD_GATE_PREFIX", "outward_on", "GATES", "gate_functions", "CABLE", "CABLE_CHANNELS",
            "CABLE_OFFSETS", "ADDED_KINDS", "added_features",
            "skyhook_on", "n_features", "train", "save_policy", "load_policy", "rollout_batch", "measure_scales",
            "rollout_series", "feature_names", "HISTORY_CHANNELS", "INSTANT_CHANNELS", "NONLINEAR", "LAG_STEPS", "FEATURE_SCALES",
@@ -168,6 +168,39 @@ CABLE_OFFSETS = {"top_tension": 1.0, "tow_vel_along": 0.0}
 ADDED_KINDS = {"predicted": PREDICTED, "gated": GATED, "cable": CABLE, "fish": FISH_GATED, "outward": OUTWARD_GATED}
 
 
+def skyhook_on(reader, obs):
+    """Skyhook's switching state per row of a batch of observations (1.0 where the law damps, else 0.0): the sheave's
+    absolute velocity ż_abs = tow_vel_z + comp_stroke_vel has the stroke velocity's sign, and |ṡ| > 1e-6 — the
+    condition of ``classical.SkyhookCompensator`` and :meth:`_Batch.base_action`."""
+    sd = reader.batch(obs, "comp_stroke_vel")
+    z_abs = reader.batch(obs, "tow_vel_z") + sd
+    return ((z_abs * sd > 0.0) & (np.abs(sd) > 1e-6)).astype(float)
+
+
+def fish_on(reader, obs):
+    """The fish's switching state per row of a batch of observations (feature set "hsf"): 1.0 where the fish's heave
+    rate (``fish_heave_rate``) and the stroke velocity (``comp_stroke_vel``) have the same sign, else 0.0."""
+    return (reader.batch(obs, "fish_heave_rate") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
+
+
+def outward_on(reader, obs):
+    """The stroke's direction of travel per row of a batch of observations (feature set "hsfo"): 1.0 where the stroke
+    (``comp_stroke``) and the stroke velocity (``comp_stroke_vel``) have the same sign — the stroke moves towards the
+    nearer end stop —, else 0.0."""
+    return (reader.batch(obs, "comp_stroke") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
+
+
+#: the gated copies of the "h" features, in feature order: (kind, the feature sets that have it, name prefix, gate
+#: function of a batch of observations)
+GATES = (("gated", GATED, GATE_PREFIX, skyhook_on), ("fish", FISH_GATED, FISH_GATE_PREFIX, fish_on),
+         ("outward", OUTWARD_GATED, OUTWARD_GATE_PREFIX, outward_on))
+
+
+def gate_functions(feature_set: str) -> tuple:
+    """The gate functions of ``feature_set``'s gated copies, in feature order (empty for a set without any)."""
+    return tuple(on for _kind, sets, _prefix, on in GATES if feature_set in sets)
+
+
 def feature_names(feature_set: str = "h") -> list[str]:
     if feature_set not in FEATURE_SETS:
         raise ValueError(f"unknown compensator feature set {feature_set!r} (known: {', '.join(FEATURE_SETS)})")
@@ -177,12 +210,9 @@ def feature_names(feature_set: str = "h") -> list[str]:
     names = ([f"{c}@-{lag / 10:.1f}s" for c in HISTORY_CHANNELS for lag in LAG_STEPS] + list(INSTANT_CHANNELS)
              + list(NONLINEAR) + pred + ["const"])
     base = list(names)
-    if feature_set in GATED:
-        names += [GATE_PREFIX + nm for nm in base]
-    if feature_set in FISH_GATED:
-        names += [FISH_GATE_PREFIX + nm for nm in base]
-    if feature_set in OUTWARD_GATED:
-        names += [OUTWARD_GATE_PREFIX + nm for nm in base]
+    for _kind, sets, prefix, _on in GATES:
+        if feature_set in sets:
+            names += [prefix + nm for nm in base]
     if feature_set in CABLE:
         names += [f"{c}@-{lag / 10:.1f}s" for c in CABLE_CHANNELS for lag in LAG_STEPS]
     return names
@@ -205,12 +235,9 @@ def added_features(feature_set: str, kind: str | None = None) -> tuple[str, np.n
         return "", np.zeros(len(names), bool)
     if kind == "predicted":
         return "predicted", np.array([nm.endswith("(pred)") for nm in names])
-    if kind == "gated":
-        return "gated", np.array([nm.startswith(GATE_PREFIX) for nm in names])
-    if kind == "fish":
-        return "fish", np.array([nm.startswith(FISH_GATE_PREFIX) for nm in names])
-    if kind == "outward":
-        return "outward", np.array([nm.startswith(OUTWARD_GATE_PREFIX) for nm in names])
+    for gate_kind, _sets, prefix, _on in GATES:
+        if kind == gate_kind:
+            return kind, np.array([nm.startswith(prefix) for nm in names])
     if kind == "cable":
         n_cable = len(CABLE_CHANNELS) * len(LAG_STEPS)
         return "cable", np.arange(len(names)) >= len(names) - n_cable
@@ -242,13 +269,11 @@ class _Features:
     """φ for a batch of observations ``(n, obs_size)`` with the history ring of every row. The single-environment
     policy uses it with n = 1, so training and deployment share one arithmetic."""
 
-    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gated: bool = False,
-                 cable: bool = False, fish_gated: bool = False, outward_gated: bool = False):
+    def __init__(self, reader: ObsReader, half_stroke: float, scales: dict, predictor=None, gates=(),
+                 cable: bool = False):
         self.reader = reader
         self.half = float(half_stroke)
-        self.gated = bool(gated)
-        self.fish_gated = bool(fish_gated)
-        self.outward_gated = bool(outward_gated)
+        self.gates = tuple(gates)           # the gate functions of the gated copies, in feature order
         self.cable = bool(cable)
         self.chist = None                   # the cable channels' history ring (n, channels, N_HISTORY), newest first
         self.scales = dict(scales)
@@ -285,12 +310,8 @@ class _Features:
         parts.append(np.ones((n, 1)))
         phi = np.concatenate(parts, axis=1)
         base = phi
-        if self.gated:
-            phi = np.concatenate([phi, base * skyhook_on(r, obs)[:, None]], axis=1)
-        if self.fish_gated:
-            phi = np.concatenate([phi, base * fish_on(r, obs)[:, None]], axis=1)
-        if self.outward_gated:
-            phi = np.concatenate([phi, base * outward_on(r, obs)[:, None]], axis=1)
+        for on in self.gates:
+            phi = np.concatenate([phi, base * on(r, obs)[:, None]], axis=1)
         if self.cable:
             c = np.stack([(r.batch(obs, ch) - CABLE_OFFSETS[ch]) / sc[ch] for ch in CABLE_CHANNELS], axis=1)
             if first or self.chist is None:
@@ -300,28 +321,6 @@ class _Features:
                 self.chist[:, :, 0] = c
             phi = np.concatenate([phi, self.chist[:, :, list(LAG_STEPS)].reshape(n, -1)], axis=1)
         return phi
-
-
-def skyhook_on(reader, obs):
-    """Skyhook's switching state per row of a batch of observations (1.0 where the law damps, else 0.0): the sheave's
-    absolute velocity ż_abs = tow_vel_z + comp_stroke_vel has the stroke velocity's sign, and |ṡ| > 1e-6 — the
-    condition of ``classical.SkyhookCompensator`` and :meth:`_Batch.base_action`."""
-    sd = reader.batch(obs, "comp_stroke_vel")
-    z_abs = reader.batch(obs, "tow_vel_z") + sd
-    return ((z_abs * sd > 0.0) & (np.abs(sd) > 1e-6)).astype(float)
-
-
-def fish_on(reader, obs):
-    """The fish's switching state per row of a batch of observations (feature set "hsf"): 1.0 where the fish's heave
-    rate (``fish_heave_rate``) and the stroke velocity (``comp_stroke_vel``) have the same sign, else 0.0."""
-    return (reader.batch(obs, "fish_heave_rate") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
-
-
-def outward_on(reader, obs):
-    """The stroke's direction of travel per row of a batch of observations (feature set "hsfo"): 1.0 where the stroke
-    (``comp_stroke``) and the stroke velocity (``comp_stroke_vel``) have the same sign — the stroke moves towards the
-    nearer end stop —, else 0.0."""
-    return (reader.batch(obs, "comp_stroke") * reader.batch(obs, "comp_stroke_vel") > 0.0).astype(float)
 
 
 def _residual(theta, phi):
@@ -421,9 +420,7 @@ class ARSCompensatorPolicy:
         self.reader = self.base.reader
         self.u = env.unwrapped
         self._feat = _Features(self.reader, self.u.half_stroke, self.scales, self.predictor,
-                                gated=self.feature_set in GATED, cable=self.feature_set in CABLE,
-                                fish_gated=self.feature_set in FISH_GATED,
-                                outward_gated=self.feature_set in OUTWARD_GATED)
+                                gates=gate_functions(self.feature_set), cable=self.feature_set in CABLE)
         self._th = None
         return self
 
@@ -475,9 +472,8 @@ class _Batch:
         self.kmap, self.bmap = e0.stiffness_range, e0.damping_range
         self.table = base_table
         self.feature_set = feature_set
-        self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gated=feature_set in GATED,
-                                  cable=feature_set in CABLE, fish_gated=feature_set in FISH_GATED,
-                                  outward_gated=feature_set in OUTWARD_GATED)
+        self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gates=gate_functions(feature_set),
+                                  cable=feature_set in CABLE)
 
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS
