@@ -17,6 +17,12 @@ Per iteration:
    candidate with the lowest mean ARS compensator cost (:mod:`agents.ars_compensator`: log σ ratios to skyhook,
    w_hit · hits, w_margin · margin) — no step if none beats the current Θ.
 
+Cheaper iterations: ``columns=K`` perturbs, each iteration, only K of the moved weights, drawn at random without
+replacement (:func:`column_subset`: a generator seeded by (training seed, iteration), so a run is reproducible) — a
+Gauss–Newton step in a random coordinate subspace (block-coordinate Gauss–Newton), K + 1 Jacobian copies instead of
+all moved weights + 1; the line search is unchanged. ``columns`` equal to the number of moved weights (or None) is
+the full step.
+
 Options: ``feature_set="hq"`` with a ``predictor`` (the init's weights copied by feature name, the predicted ones
 starting at 0), and ``free="predicted"`` to move only the predicted features' weights (the Jacobian then has one column
 per moved weight); ``feature_set="hs"`` (the skyhook-gated copy of the features, starting at 0) with ``free="gated"``
@@ -85,6 +91,16 @@ def free_mask(feature_set: str, free: str) -> np.ndarray:
     return np.tile(cols, arc.N_ACT)
 
 
+def column_subset(n_free: int, columns: int | None, seed: int, iteration: int) -> np.ndarray:
+    """Positions (sorted, into the moved weights) of the Jacobian columns of one iteration: all ``n_free`` when
+    ``columns`` is None or ≥ ``n_free``, else ``columns`` of them drawn without replacement by a generator seeded by
+    (training seed, iteration, 62) — the same draw on every run of that seed and iteration."""
+    if columns is None or int(columns) >= n_free:
+        return np.arange(n_free)
+    rng = np.random.default_rng([int(seed), int(iteration), 62])
+    return np.sort(rng.choice(n_free, size=int(columns), replace=False))
+
+
 def _costs(sh, sp, hits, mg, pitch_weight, hit_weight, margin_weight, fail_penalty=1.0):
     """ARS compensator cost (:mod:`agents.ars_compensator`) of candidate rows 1… of (candidates, episodes) arrays
     against row 0 (skyhook) on the same waves: ln σ_h ratio + w_p ln σ_θ ratio + w_hit · hits + w_margin · margin;
@@ -100,7 +116,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
           margin_weight: float = arc.DEFAULT_MARGIN_WEIGHT, margin_start: float = arc.DEFAULT_MARGIN_START,
           stop_guard: float | None = None, episode_seconds: float = 180.0, discard: float = 60.0, entries=None,
           init: arc.ARSCompensatorPolicy | None = None, progress: bool = True, feature_set: str | None = None,
-          predictor=None, free: str = "all", parallel: bool = False, log=print) -> arc.ARSCompensatorPolicy:
+          predictor=None, free: str = "all", parallel: bool = False, columns: int | None = None,
+          log=print) -> arc.ARSCompensatorPolicy:
     """Gauss–Newton search (module docstring) from Θ = 0 (skyhook) or from ``init`` (its weights copied by feature
     name; features it does not have start at 0). Stops after ``iterations`` (continuing a Gauss–Newton ``init``'s
     count, so its wave seeds stay fresh) or when the next iteration would pass ``minutes`` of wall time.
@@ -109,7 +126,9 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     None = the init's ("h" without init); ``predictor``: the causal predictor of a predicted feature set ("hq",
     agents/predictor.py; default ``init``'s). ``free``: "all" weights move, or only the "predicted" (hq) or "gated"
     (hs) features' (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper).
-    ``parallel``: step the batches on all numba threads (the same result bit for bit, less wall time)."""
+    ``parallel``: step the batches on all numba threads (the same result bit for bit, less wall time). ``columns``:
+    None = a Jacobian column per moved weight; K = K of them per iteration, drawn at random (:func:`column_subset`,
+    the step moves only those)."""
     __import__("towenv")
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from .baselines import load_tuned
@@ -132,8 +151,11 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
         raise RuntimeError("no tuned skyhook table (agents/hyperparams/baselines.yml): run python -m agents.tuning")
     ev, idx, keys = training_entries(arc.ENV_ID, table, entries)
     C, NA, NF, R = len(keys), arc.N_ACT, arc.n_features(fs), int(replicates)
-    free_idx = np.flatnonzero(mask)                 # the moved weights, as flat indices into Θ.reshape(-1)
-    NW = len(free_idx)
+    moved_idx = np.flatnonzero(mask)                # the moved weights, as flat indices into Θ.reshape(-1)
+    if columns is not None and not (isinstance(columns, (int, np.integer)) and 1 <= columns <= len(moved_idx)):
+        raise ValueError(f"columns must be None or an integer in 1..{len(moved_idx)} (the moved weights of "
+                         f"free={free!r}; got {columns!r})")
+    NW = len(moved_idx) if columns is None else int(columns)      # Jacobian columns per iteration
     theta = initial_theta(init, keys, fs)
     ridges = [float(r) for r in ridges]
     n_ep = len(idx) * R
@@ -146,8 +168,9 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     batch_j = arc._Batch(venv_j, table, scales, fs, predictor)
     batch_l = arc._Batch(venv_l, table, scales, fs, predictor)
     curve = []
-    log(f"[gn_comp] seed {seed}: feature set {fs}, {C} sea states, {NA} x {NF} weights each ({NW} moved: {free}); "
-        f"per iteration {n_ep} episodes x ({NW} + 1) "
+    log(f"[gn_comp] seed {seed}: feature set {fs}, {C} sea states, {NA} x {NF} weights each ({len(moved_idx)} moved: {free})"
+        + (f"; {NW} random Jacobian columns of them per iteration" if NW < len(moved_idx) else "")
+        + f"; per iteration {n_ep} episodes x ({NW} + 1) "
         f"for the Jacobian and {n_ep} x ({len(ridges)} ridges + current + skyhook) for the line search, "
         f"{episode_seconds:g} s each; eps={eps} ridges={ridges} pitch_weight={pitch_weight} hit_weight={hit_weight} "
         f"margin_weight={margin_weight} margin_start={margin_start} stop_guard={guard}"
@@ -157,6 +180,7 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
         if time.perf_counter() - t_start + last > 60.0 * minutes:
             break
         t0 = time.perf_counter()
+        free_idx = moved_idx[column_subset(len(moved_idx), columns, seed, it)]     # this iteration's columns
         ents = [(ev[i][0], ev[i][1]) for _r in range(R) for i in idx]
         reps = [r for r in range(R) for _i in idx]
         code = np.array([keys.index(nearest_key(table, sea)) for sea, _s in ents])
@@ -234,7 +258,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
                                 "ridges": ridges, "pitch_weight": pitch_weight, "hit_weight": hit_weight,
                                 "margin_weight": margin_weight, "margin_start": margin_start,
                                 "episode_seconds": episode_seconds, "discard": discard, "entries": idx,
-                                "init": init.name if init is not None else None, "free": free},
+                                "init": init.name if init is not None else None, "free": free,
+                                "columns": None if columns is None else int(columns)},
             "feature_set": fs,
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)}",
@@ -285,6 +310,9 @@ def main(argv=None) -> int:
                          "outward-gated copy's (hsfo)")
     ap.add_argument("--entries", type=int, nargs="+", default=None,
                     help="indices of the evaluation (sea state, heading) entries to train on (default all 12)")
+    ap.add_argument("--columns", type=int, default=None,
+                    help="Jacobian columns per iteration: K of the moved weights drawn at random each iteration "
+                         "(default: all of them)")
     add_parallel_flag(ap)
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
@@ -304,6 +332,8 @@ def main(argv=None) -> int:
         ap.error(f"--ridges must be positive numbers (got {a.ridges})")
     if a.stop_guard is not None and not 0.0 <= a.stop_guard <= 1.0:
         ap.error(f"--stop-guard must be 0 (off) or in (0, 1] (got {a.stop_guard})")
+    if a.columns is not None and a.columns < 1:
+        ap.error(f"--columns must be a positive integer (got {a.columns})")
     init = None
     if a.init:
         try:
@@ -316,7 +346,8 @@ def main(argv=None) -> int:
     try:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight, a.hit_weight,
                     a.margin_weight, stop_guard=a.stop_guard, init=init, entries=a.entries, feature_set=a.features,
-                    predictor=predictor, free=a.free, parallel=a.parallel)
+                    predictor=predictor, free=a.free, parallel=a.parallel,
+                    columns=a.columns)
     except ValueError as e:
         ap.error(str(e))
     arc.save_policy(pol, out)

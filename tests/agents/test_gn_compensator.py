@@ -162,6 +162,49 @@ def test_gated_features_start_at_zero_and_free_gated_moves_only_them(capsys):
     assert ex.value.code == 2 and "no_such_policy" in capsys.readouterr().err
 
 
+def test_random_columns_move_only_the_drawn_weights():
+    """``columns=K``: each iteration's Jacobian has K + 1 copies, not one per moved weight + 1, and the step moves only
+    the K weights drawn for that (seed, iteration) — sorted, distinct, inside the moved set, the same draw every time,
+    another draw at the next iteration; K = all moved weights is the full step."""
+    sub = gnc.column_subset(90, 7, seed=5, iteration=3)
+    assert len(sub) == len(set(sub)) == 7 and np.all(np.diff(sub) > 0) and 0 <= sub[0] and sub[-1] < 90
+    assert np.array_equal(sub, gnc.column_subset(90, 7, seed=5, iteration=3))
+    assert not np.array_equal(sub, gnc.column_subset(90, 7, seed=5, iteration=4))
+    assert not np.array_equal(sub, gnc.column_subset(90, 7, seed=6, iteration=3))
+    assert np.array_equal(gnc.column_subset(90, None, 5, 3), np.arange(90))
+    assert np.array_equal(gnc.column_subset(90, 90, 5, 3), np.arange(90))
+    import agents
+    init = arc.load_policy(Path(agents.__file__).parent / "trained" / "gn_CompensatorGains-v0_s1.npz")
+    pol = gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, discard=60.0, progress=False,
+                    init=init, feature_set="hs", free="gated", columns=5)
+    assert pol.meta["hyperparameters"]["columns"] == 5
+    # 1 episode x (5 drawn weights + 1) Jacobian copies + (3 ridges + 2) line-search copies, 62 s each
+    assert pol.meta["num_timesteps"] == (5 + 1 + 5) * 620
+    (pick,) = pol.meta["curve"][0]["picks"]
+    nh = arc.n_features("h")
+    moved = np.flatnonzero(gnc.free_mask("hs", "gated"))
+    drawn = moved[gnc.column_subset(len(moved), 5, seed=5, iteration=pol.meta["first_iteration"])]
+    for k in pol.theta:
+        assert np.array_equal(pol.theta[k][:, :nh], init.theta[k])
+        changed = np.flatnonzero(pol.theta[k].reshape(-1) != initial_flat(init, k, nh))
+        assert set(changed) <= set(drawn)
+        if k == pick["sea_state"] and pick["ridge"] is not None:
+            assert len(changed) >= 1
+    for bad in (0, 91):
+        with pytest.raises(ValueError, match="columns"):
+            gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, progress=False, columns=bad)
+    with pytest.raises(SystemExit) as ex:
+        gnc.main(["--columns", "0"])
+    assert ex.value.code == 2
+
+
+def initial_flat(init, key, nh):
+    """``init``'s weights of sea state ``key`` in the hs layout (the gated copy at 0), flat as Θ.reshape(-1)."""
+    out = np.zeros((arc.N_ACT, 2 * nh))
+    out[:, :nh] = init.theta[key]
+    return out.reshape(-1)
+
+
 def _seed_sets():
     """(evaluation base seeds, the reserved evaluation/tuning/validation/Hover/final/teacher seeds, the ARS
     (winch, compensator), probe and WinchPayout Gauss–Newton training seeds), value by value."""
