@@ -1,9 +1,11 @@
 """Training cost of committed ARS / Gauss–Newton policy files, following each file's ``--init`` chain (issue 14's
 "≤ 1 h wall per seed" recipe goal). For every file: its own wall time (the sum of ``meta["curve"][*]["seconds"]``,
 the time of its iterations) and env steps, and the totals of the whole chain it continues (the ``init`` named in its
-hyperparameters, looked up next to it; for a weight average, every member's chain with their shared start once):
+hyperparameters, looked up next to it, then in the ``--search`` folders in their order; for a weight average, every
+member's chain with their shared start once):
 
     python scripts/training_cost.py agents/trained/gnq2_WinchPayout-v0_s{0,1,2}.npz agents/trained/gn_CompensatorGains-v0_s{0,1,2}.npz
+    python scripts/training_cost.py runs/gnspfr/gnspfr_CompensatorGains-v0_s0.npz --search agents/trained
 
 The wall times are what the runs took as they were run (three seeds side by side on two cores here), not CPU time.
 """
@@ -32,10 +34,24 @@ def own_cost(meta) -> tuple[float, int]:
     return seconds, int(meta.get("num_timesteps", 0))
 
 
-def chain(path, _inside=frozenset()) -> list[tuple[str, float, int]]:
-    """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path``. A weight average
-    (``meta["averaged_from"]``, scripts/average_compensator.py) costs its members' chains, looked up next to it, a run
-    they share (their common start) counted once, then itself (no iterations of its own)."""
+def _find(path: Path, name: str, search, what: str) -> Path:
+    """The policy file ``name`` (a stem or file name) of ``path``'s chain: next to ``path``, else in the first of the
+    ``search`` folders that has it; ValueError naming ``what`` and every place looked in if none has it."""
+    places = [path.parent] + [Path(d) for d in search]
+    for d in places:
+        nxt = d / f"{Path(name).stem}.npz"
+        if nxt.exists():
+            return nxt
+    raise ValueError(f"{path}: its {what} {name!r} is not next to it"
+                     + (f" nor in {', '.join(str(d) for d in places[1:])}" if len(places) > 1 else "")
+                     + f" ({places[0] / (Path(name).stem + '.npz')}; --search adds folders to look in)")
+
+
+def chain(path, _inside=frozenset(), search=()) -> list[tuple[str, float, int]]:
+    """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path`` (each link looked
+    up next to the file that names it, then in the ``search`` folders). A weight average (``meta["averaged_from"]``,
+    scripts/average_compensator.py) costs its members' chains, looked up the same way, a run they share (their common
+    start) counted once, then itself (no iterations of its own)."""
     path = Path(path)
     members = read_meta(path).get("averaged_from")
     if members:
@@ -43,10 +59,8 @@ def chain(path, _inside=frozenset()) -> list[tuple[str, float, int]]:
             raise ValueError(f"{path}: the weight average lists itself among its members (directly or through one)")
         out, seen = [], set()
         for m in members:
-            nxt = path.parent / f"{Path(m).stem}.npz"
-            if not nxt.exists():
-                raise ValueError(f"{path}: its member {m!r} is not next to it ({nxt})")
-            for run in chain(nxt, _inside | {path.stem}):
+            nxt = _find(path, m, search, "member")
+            for run in chain(nxt, _inside | {path.stem}, search):
                 if run[0] not in seen:
                     seen.add(run[0])
                     out.append(run)
@@ -61,19 +75,22 @@ def chain(path, _inside=frozenset()) -> list[tuple[str, float, int]]:
         init = (meta.get("hyperparameters") or {}).get("init")
         if not init:
             return out[::-1]
-        nxt = path.parent / f"{Path(init).stem}.npz"
-        if not nxt.exists():
-            raise ValueError(f"{path}: its --init {init!r} is not next to it ({nxt})")
-        path = nxt
+        path = _find(path, init, search, "--init")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("policies", nargs="+", help="ARS / Gauss-Newton policy files (.npz)")
+    ap.add_argument("--search", nargs="+", default=[], metavar="DIR",
+                    help="folders to look in for a chain's --init files and average members not next to the file "
+                         "that names them (in this order)")
     a = ap.parse_args(argv)
+    for d in a.search:
+        if not Path(d).is_dir():
+            ap.error(f"--search: {d} is not a folder")
     for p in a.policies:
         try:
-            runs = chain(p)
+            runs = chain(p, search=a.search)
         except ValueError as exc:
             ap.error(str(exc))
         total_s, total_n = sum(r[1] for r in runs), sum(r[2] for r in runs)

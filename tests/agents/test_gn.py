@@ -327,6 +327,14 @@ def test_training_cost_follows_the_init_chain(tmp_path, capsys):
         with pytest.raises(SystemExit) as ex:
             tc.main([str(f)])
         assert ex.value.code == 2 and msg in capsys.readouterr().err
+    # --search: the lone file's chain found in the package folder, the same totals as there; a missing folder refused
+    assert tc.chain(lone, search=[tmp_path / "nowhere", trained])[:-1] == runs[:-1]
+    assert tc.chain(lone, search=[trained])[-1] == runs[-1]
+    assert tc.main([str(lone), "--search", str(trained)]) == 0
+    assert f"{runs[0][0]}" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as ex:
+        tc.main([str(lone), "--search", str(tmp_path / "nowhere")])
+    assert ex.value.code == 2 and "nowhere" in capsys.readouterr().err
 
 
 #: Gauss-Newton iterations the one-hour recipes' 57-min budget allowed per seed (three side by side on two cores):
