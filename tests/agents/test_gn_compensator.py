@@ -552,11 +552,13 @@ def test_rerun_chain_files_carry_the_gns_recipe(seed):
 
 
 @pytest.mark.parametrize("family, parent, fs, free", [("gnsf", "gns", "hsf", "fish"), ("gnspf", "gnsp", "hsf", "fish"),
-                                                      ("gnsfo", "gnsf", "hsfo", "outward")])
+                                                      ("gnsfo", "gnsf", "hsfo", "outward"),
+                                                      ("gnspfr", "gnspf", "hsfo", "outward")])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_gated_continuations_carry_their_recipe_and_act(seed, family, parent, fs, free):
     """The compensator headline since 2026-12-07 (``gnsfo``, feature set hsfo, docs/agents.md "A third gate"), the one
-    before it (``gnsf``, hsf, "A second gate") and the one-hour recipe's fish-gated stage (``gnspf``, from ``gnsp``) are
+    before it (``gnsf``, hsf, "A second gate"), the one-hour recipe's fish-gated stage (``gnspf``, from ``gnsp``) and
+    its outward-gated stage of 30 random Jacobian columns per iteration (``gnspfr``, chain under an hour) are
     package data: the recipe recorded (the parent's iteration count continued, 2 replicates, ridges 0.01…100, only
     the newest gated copy's weights moved, from the parent file of the same seed, its stop guard 0.9), every parent
     weight kept exactly, some new weights moved, and the policy acts inside the action box, not as its parent does."""
@@ -577,3 +579,10 @@ def test_gated_continuations_carry_their_recipe_and_act(seed, family, parent, fs
     assert any(np.any(pol.theta[k][:, n_parent:] != 0.0) for k in pol.theta)
     assert pol.stop_guard == init.stop_guard == 0.9 and pol.base_table == init.base_table
     _assert_acts_in_box_and_unlike(pol, init)
+    # the 30-random-column stage (docs/agents.md "Cheaper Gauss–Newton steps within the hour"): its chain, from the
+    # shared ARS start, fits in the hour of iterations (scripts/training_cost.py)
+    assert hp.get("columns") == (30 if family == "gnspfr" else None)
+    if family == "gnspfr":
+        runs = load_script("training_cost").chain(base / f"{family}_CompensatorGains-v0_s{seed}.npz")
+        assert [r[0].split("_")[0] for r in runs] == ["arsp", "gnp", "gnsp", "gnspf", "gnspfr"]
+        assert sum(r[1] for r in runs) < 3600.0
