@@ -152,7 +152,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     ev, idx, keys = training_entries(arc.ENV_ID, table, entries)
     C, NA, NF, R = len(keys), arc.N_ACT, arc.n_features(fs), int(replicates)
     moved_idx = np.flatnonzero(mask)                # the moved weights, as flat indices into Θ.reshape(-1)
-    if columns is not None and not (isinstance(columns, (int, np.integer)) and 1 <= columns <= len(moved_idx)):
+    if columns is not None and (isinstance(columns, bool) or not isinstance(columns, (int, np.integer))
+                                or not 1 <= columns <= len(moved_idx)):
         raise ValueError(f"columns must be None or an integer in 1..{len(moved_idx)} (the moved weights of "
                          f"free={free!r}; got {columns!r})")
     NW = len(moved_idx) if columns is None else int(columns)      # Jacobian columns per iteration
@@ -332,8 +333,6 @@ def main(argv=None) -> int:
         ap.error(f"--ridges must be positive numbers (got {a.ridges})")
     if a.stop_guard is not None and not 0.0 <= a.stop_guard <= 1.0:
         ap.error(f"--stop-guard must be 0 (off) or in (0, 1] (got {a.stop_guard})")
-    if a.columns is not None and a.columns < 1:
-        ap.error(f"--columns must be a positive integer (got {a.columns})")
     init = None
     if a.init:
         try:

@@ -190,7 +190,7 @@ def test_random_columns_move_only_the_drawn_weights():
         assert set(changed) <= set(drawn)
         if k == pick["sea_state"] and pick["ridge"] is not None:
             assert len(changed) >= 1
-    for bad in (0, 91):
+    for bad in (0, 91, True, 5.0):
         with pytest.raises(ValueError, match="columns"):
             gnc.train(seed=5, iterations=1, entries=[4], episode_seconds=62.0, progress=False, columns=bad)
     with pytest.raises(SystemExit) as ex:
