@@ -105,10 +105,26 @@ def read_report_rows(report_dir) -> tuple[dict, dict]:
     return summary, out
 
 
+#: what a report's controller description says after a baseline's rows were reused (then the report's folder)
+REUSED_MARK = " — rows reused from the report "
+
+
+def reused_origin(description: str) -> tuple[str, str | None]:
+    """(the baseline's own description, the report its rows were reused from or None) of a controller description
+    in a report: a report that reused a baseline's rows can lend them again, its description compared without the
+    reuse note."""
+    own, sep, rest = description.partition(REUSED_MARK)
+    if not sep:
+        return description, None
+    return own, rest.split(" (not re-run", 1)[0].split(" (which reused", 1)[0]
+
+
 def _reused_rows(name: str, report_dir, env_id: str, env_kwargs: dict, description: str, episodes, discard: float):
     """The rows of baseline ``name`` from ``report_dir`` for exactly these ``episodes`` (same sea state, heading
     and wave seed, in order), environment keywords, start-up window and baseline description (its tuned gains
-    and settings); :class:`ReuseError` naming what differs. Returns (rows, all rows)."""
+    and settings; a report that reused the rows itself is compared without its reuse note, :func:`reused_origin`);
+    :class:`ReuseError` naming what differs. Returns (rows, all rows, the report the rows were first reused from or
+    None)."""
     try:
         summary, rows = read_report_rows(report_dir)
     except ReuseError as exc:
@@ -122,6 +138,9 @@ def _reused_rows(name: str, report_dir, env_id: str, env_kwargs: dict, descripti
     if name not in rows:
         raise ReuseError(f"--reuse {name}: {report_dir} has no rows of {name!r} (it has {', '.join(sorted(rows))})")
     old_desc = ((summary.get("controllers") or {}).get(name) or {}).get("description")
+    origin = None
+    if isinstance(old_desc, str):
+        old_desc, origin = reused_origin(old_desc)
     if old_desc != description:
         raise ReuseError(f"--reuse {name}: its description differs (settings or tuned gains changed): this run "
                          f"{description!r}; {report_dir}: {old_desc!r}")
@@ -139,7 +158,7 @@ def _reused_rows(name: str, report_dir, env_id: str, env_kwargs: dict, descripti
         if g != g0 or int(seed) != seed0 or abs(float(sea.heading_deg) - head0) > 1e-9:
             raise ReuseError(f"--reuse {name}: episode {i} differs: this run {g}, heading {sea.heading_deg:g}, wave "
                              f"seed {seed}; {report_dir}: {g0}, heading {head0:g}, wave seed {seed0}")
-    return [dict(m) for *_x, m in rows[name]], rows
+    return [dict(m) for *_x, m in rows[name]], rows, origin
 
 
 def _jsonable_kwargs(kw: dict) -> dict:
@@ -313,12 +332,13 @@ def run_evaluation(env_id: str, trained: list[tuple[str, Any, dict]], baselines:
         b = make_baseline(n, base_env, tuned)
         desc = b.describe()
         if n in reuse:
-            reused[n], old_rows[n] = _reused_rows(n, reuse[n], env_id, env_kwargs, desc, episodes, discard)
+            reused[n], old_rows[n], origin = _reused_rows(n, reuse[n], env_id, env_kwargs, desc, episodes, discard)
             diff = sorted(set(reused[n][0]) ^ set(metric_columns(kind)))    # before any episode runs
             if diff:
                 raise ReuseError(f"--reuse {n}: {reuse[n]}'s metric columns differ from this version's "
                                  f"({', '.join(diff)})")
-            desc += f" — rows reused from the report {reuse[n]} (not re-run; see the reuse check)"
+            desc += (f"{REUSED_MARK}{reuse[n]}" + (f" (which reused them from {origin})" if origin else "")
+                     + " (not re-run; see the reuse check)")
         ctrls.append(Controller(n, b, base_env, "baseline", desc))
     checks = {n: {"from": str(reuse[n]), "checked_against": [], "max_rel_diff": 0.0} for n in reused}
     metrics: dict[str, list] = {c.name: [] for c in ctrls}

@@ -38,11 +38,21 @@ REPORT_FILES = ("summary.png", "psd.png", "timeseries.png", "report.md", "metric
                 "summary.json")
 
 
+#: the verdict of the compensator goal's alternative criterion (within 80 % of the clairvoyant active bound) when
+#: the bound itself reaches the 15 % target: the goal then asks for the 15 % criteria, not this one
+NOT_APPLICABLE = "not applicable: the bound reaches 15 %, so the 15 % criteria apply"
+
+
 def verdict(goal: dict, n_episodes: int) -> str:
     """``"MET"`` / ``"not met"`` for a goal of :func:`agents.evaluation.assess_goals`, or
-    ``"no verdict: N episodes < 24"`` with fewer than :data:`MIN_VERDICT_EPISODES` episodes."""
+    ``"no verdict: N episodes < 24"`` with fewer than :data:`MIN_VERDICT_EPISODES` episodes;
+    :data:`NOT_APPLICABLE` for the compensator goal's alternative criterion (within 80 % of the clairvoyant active
+    bound) when the bound reaches 15 % (``bound_below_goal`` False): the issue asks for it only where the bound
+    shows 15 % unattainable."""
     if n_episodes < MIN_VERDICT_EPISODES:
         return f"no verdict: {n_episodes} episodes < {MIN_VERDICT_EPISODES}"
+    if goal.get("bound_below_goal") is False:
+        return NOT_APPLICABLE
     return "MET" if goal["met"] else "not met"
 
 

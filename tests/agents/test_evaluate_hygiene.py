@@ -31,9 +31,10 @@ def _tmp_leftovers(folder: Path):
 
 
 # ---------------------------------------------------------------------------------------- synthetic results
-def _synthetic_result(names_trained, n_entries=12, replicates=1, seed=0, offset=0, kind="winch"):
+def _synthetic_result(names_trained, n_entries=12, replicates=1, seed=0, offset=0, kind="winch", extra=None):
     """An EvalResult with made-up (but structurally real) per-episode metrics: every controller's
-    episodes are synthetic time series run through agents.metrics.episode_metrics."""
+    episodes are synthetic time series run through agents.metrics.episode_metrics. ``extra``: more baselines,
+    {name: heave amplitude} (the reference's is 1, best_passive's 0.7)."""
     from agents.common import sea_key, sea_label
     from agents.evaluation import Controller, EvalResult, assess_goals, summarize
     from agents.metrics import EpisodeRecord, episode_metrics
@@ -47,7 +48,8 @@ def _synthetic_result(names_trained, n_entries=12, replicates=1, seed=0, offset=
             episodes.append((sea_key(sea), sea_label(sea, 3 + i // 4), sea, s + offset + 100 * r))
     rng = np.random.default_rng(seed)
     bl = ["fixed_winch", "along_cable"] if kind == "winch" else ["locked", "best_passive"]
-    amp = {"fixed_winch": 1.0, "along_cable": 0.5, "locked": 1.0, "best_passive": 0.7}
+    amp = {"fixed_winch": 1.0, "along_cable": 0.5, "locked": 1.0, "best_passive": 0.7} | dict(extra or {})
+    bl += list(extra or {})
     ctrls = [Controller(n, SimpleNamespace(), None, "trained", "synthetic", {"algo": "ppo", "seed": k})
              for k, n in enumerate(names_trained)]
     ctrls += [Controller(n, SimpleNamespace(), None, "baseline", "synthetic") for n in bl]
@@ -155,6 +157,28 @@ def test_no_verdict_below_minimum(tmp_path):
     assert "no verdict" not in md and ("**met**" in md or "**not met**" in md)
     s = json.loads((tmp_path / "enough" / "summary.json").read_text())
     assert {gd["verdict"] for gd in s["goals"]} <= {"MET", "not met"}
+
+
+@pytest.mark.parametrize("bound_amp, applies", [(0.3, False), (0.65, True)])
+def test_alternative_compensator_criterion_only_where_the_bound_misses_15_percent(tmp_path, bound_amp, applies):
+    """The compensator goal's "within 80 % of the clairvoyant active bound" is the issue's fallback for a bound
+    below 15 %: with a bound of 57 % below best_passive (amplitude 0.3 against 0.7) its row says "not applicable"
+    (no met / not met beside the 15 % criteria); with a bound of ~7 % (0.65) it gets a verdict."""
+    from agents.report import NOT_APPLICABLE, verdict, write_report
+    res = _synthetic_result(["gn_a"], replicates=2, kind="compensator", extra={"clairvoyant_active": bound_amp})
+    alt = [g for g in res.goals if g["criterion"].startswith("within 80 %")]
+    assert len(alt) == 1 and alt[0]["bound_below_goal"] is applies
+    assert (alt[0]["bound"][0] < 0.15) is applies
+    assert (verdict(alt[0], 24) == NOT_APPLICABLE) is not applies
+    assert verdict(alt[0], 24) in ({"MET", "not met"} if applies else {NOT_APPLICABLE})
+    assert verdict(alt[0], 23).startswith("no verdict")                 # the episode minimum still comes first
+    others = [g for g in res.goals if g is not alt[0] and g["policy"] == "gn_a"]
+    assert others and all(verdict(g, 24) in ("MET", "not met") for g in others)
+    md = write_report(res, tmp_path / "r", "t", plots=False).read_text()
+    row = next(line for line in md.splitlines() if "within 80 %" in line and "`gn_a`" in line)
+    assert (NOT_APPLICABLE in row) is not applies
+    s = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert [gd["verdict"] for gd in s["goals"] if gd["criterion"].startswith("within 80 %")] == [verdict(alt[0], 24)]
 
 
 def test_evaluate_prints_no_verdict(tmp_path, monkeypatch, capsys, evaluate):
@@ -371,6 +395,18 @@ def test_reuse_takes_rows_only_from_a_report_of_the_same_physics(tmp_path, evalu
     assert [r["rms_heave"] for r in ra] == [r["rms_heave"] for r in rb] and len(ra) == 2
     assert json.loads((b / "summary.json").read_text())["reused"]["along_cable"]["checked_against"] == ["fixed_winch"]
     assert "Reused rows" in (b / "report.md").read_text()
+    # a report that reused the rows lends them again (its description compared without its reuse note), and the
+    # new report names both folders
+    from agents.evaluation import REUSED_MARK, reused_origin
+    desc_b = json.loads((b / "summary.json").read_text())["controllers"]["along_cable"]["description"]
+    assert REUSED_MARK in desc_b and reused_origin(desc_b)[1] == str(a)
+    assert evaluate.main(["along_cable", "--episodes", "0", "5", "--baselines", "fixed_winch", "along_cable",
+                          "--name", "b2", "--reuse", f"along_cable={b}", *quick]) == 0
+    b2 = tmp_path / "runs" / "reports" / "b2"
+    desc_b2 = json.loads((b2 / "summary.json").read_text())["controllers"]["along_cable"]["description"]
+    assert reused_origin(desc_b2) == (reused_origin(desc_b)[0], str(b)) and f"which reused them from {a}" in desc_b2
+    assert [r["rms_heave"] for r in rows(b2, "along_cable")] == [r["rms_heave"] for r in ra]
+    capsys.readouterr()
     # a report of another version (other metric columns): refused before any episode runs
     import shutil
     import agents.evaluation as evaluation
