@@ -4,7 +4,8 @@ two Gauss-Newton chains from one ARS start with disjoint training seeds (docs/ag
     python scripts/average_compensator.py --seed 0 --export runs/chain/gnsm_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s1.npz
 
 scripts/training_cost.py adds up the average's training cost from its members, looked up next to the average, and
-their --init chains next to them: write the average into the members' folder (``--export``) for that; the default,
+their --init chains next to them, then in the folders given to its ``--search`` (e.g. ``--search agents/trained
+runs/chain``): write the average into the members' folder (``--export``), or name their folders there; the default,
 runs/average_CompensatorGains-v0_s<seed>.npz under the current folder, says so when the members lie elsewhere.
 """
 import argparse
@@ -44,9 +45,10 @@ def main(argv=None) -> int:
     Path(a.export).parent.mkdir(parents=True, exist_ok=True)
     out = arc.save_policy(avg, a.export)
     print(f"[average] wrote {out}: mean of {', '.join(m.name for m in members)}", flush=True)
-    if any(Path(p).resolve().parent != Path(out).resolve().parent for p in a.policies):
-        print("[average] note: its members are not in its folder, so scripts/training_cost.py cannot add up its cost "
-              "(it looks them up next to the average)", flush=True)
+    away = sorted({str(Path(p).parent) for p in a.policies if Path(p).resolve().parent != Path(out).resolve().parent})
+    if away:
+        print("[average] note: its members are not in its folder: scripts/training_cost.py adds up its cost with "
+              f"--search {' '.join(away)} (it looks next to the average first)", flush=True)
     return 0
 
 

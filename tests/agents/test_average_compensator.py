@@ -72,7 +72,7 @@ def test_cli_writes_a_file_that_reports_and_costs_name_its_members(tmp_path, cap
     script = load_script("average_compensator")
     assert script.main(["--seed", "0", "--export", str(out), str(tmp_path / "gnsp_CompensatorGains-v0_s0.npz"),
                         str(tmp_path / "gnsp_CompensatorGains-v0_s1.npz")]) == 0
-    assert "cannot add up its cost" not in capsys.readouterr().out      # members next to it: no note
+    assert "--search" not in capsys.readouterr().out      # members next to it: no note
     avg = arc.load_policy(out)
     assert avg.meta["averaged_from"] == ["gnsp_CompensatorGains-v0_s0", "gnsp_CompensatorGains-v0_s1"]
     desc = trained_description(avg.meta)
@@ -165,4 +165,11 @@ def test_cli_default_output_goes_under_runs_in_the_current_folder(tmp_path, monk
     assert out.is_file() and arc.load_policy(out).meta["seed"] == 5
     printed = capsys.readouterr().out
     assert str(Path("runs") / "average_CompensatorGains-v0_s5.npz") in printed
-    assert "training_cost.py cannot add up its cost" in printed        # the members lie in agents/trained
+    assert f"training_cost.py adds up its cost with --search {TRAINED}" in printed   # the members lie in agents/trained
+    cost = load_script("training_cost")
+    with pytest.raises(SystemExit) as ex:                               # not next to it: refused, naming --search
+        cost.main([str(out)])
+    assert ex.value.code == 2 and "--search" in capsys.readouterr().err
+    assert cost.main([str(out), "--search", str(TRAINED)]) == 0        # the command the note gives
+    line = capsys.readouterr().out
+    assert "gnsp_CompensatorGains-v0_s0" in line and "gnsp_CompensatorGains-v0_s1" in line
