@@ -34,8 +34,10 @@ def load_script(name: str):
     import importlib.util
     if name in ("train", "evaluate"):
         return importlib.import_module(f"agents.{name}")
+    import sys
     spec = importlib.util.spec_from_file_location(f"towenv_script_{name}", REPO / "scripts" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod        # a script's dataclasses look their module up there while being defined
     spec.loader.exec_module(mod)
     return mod
 
