@@ -662,7 +662,7 @@ def paired_front(cfg, runs, pairs, log=print, limit=0.10, spread=1.5, most=3):
                    error=m.combined, houbolt=f"{c.segments} seg Δt {fmt_dt(c.dt)} s", houbolt_error=c.combined,
                    study_ratio=ratio, study_houbolt=f"{h.segments} seg Δt {fmt_dt(h.dt)} s", ratios=ratios,
                    median=float(np.median(ratios)), moordyn_rtf=1.0 / float(np.median(md_s)),
-                   houbolt_rtf=1.0 / float(np.median(h_s[:, j])),
+                   houbolt_rtf=1.0 / float(np.median(h_s[:, j])), spread=float(spread),
                    candidates={f"{r.segments} seg Δt {fmt_dt(r.dt)} s": 1.0 / float(np.median(h_s[:, i]))
                                for i, r in enumerate(cands)})
         out.append(row)
@@ -678,11 +678,12 @@ def paired_text(paired, goal=20.0):
     if not paired:
         return ""
     n = len(paired[0]["ratios"])
+    spread = paired[0].get("spread", 1.5)
     lines = [f"\n**Paired re-timing of MoorDyn's front** ({n} alternating rounds per point, every run the fastest of 3 "
-             "runs of the whole duration, back to back; the Houbolt runs of equal or better accuracy within 1.5× of "
-             "the cheapest by the study's timing are all re-timed and the fastest by median time is the match — the "
-             "study's timings above are single runs minutes apart; `python scripts/speed_accuracy.py --scenes "
-             "shared_deck --retime 7`):\n",
+             "runs of the whole duration, back to back; the Houbolt runs of equal or better accuracy within "
+             f"{spread:g}× of the cheapest by the study's timing are all re-timed and the fastest by median time is the "
+             "match — the study's timings above are single runs minutes apart; `python scripts/speed_accuracy.py "
+             f"--scenes shared_deck --retime {n}`):\n",
              "| MoorDyn run | its error (%) | Houbolt run (median real-time factor of each candidate) | Houbolt error (%) | "
              "MoorDyn real-time factor | speed-up: median (min–max over the rounds) | the study's single timing |",
              "|---|---|---|---|---|---|---|"]
@@ -1117,10 +1118,8 @@ def verdict(runs, title="Is towenv's default solver ahead of MoorDyn at equal ac
                      f"{(f'{h.rtf:.0f}×') if h else '—'} | {(f'{ratio:.1f}×') if h else '—'} |")
     txt = "\n".join(lines) + "\n\n"
 
-    front = md_front
-
     usable = [x for x in eq if x[0].combined <= 0.10]
-    pareto = front(usable)
+    pareto = md_front(usable)
     pr = [x[2] for x in pareto if np.isfinite(x[2])]
     ratios = [x[2] for x in usable if np.isfinite(x[2])]
     holds = bool(pr) and min(pr) >= 10
@@ -1138,7 +1137,7 @@ def verdict(runs, title="Is towenv's default solver ahead of MoorDyn at equal ac
     for x in usable:
         groups.setdefault("fine" if "Δt_c" in x[0].solver else "coarse", []).append(x)
     for g, xs in groups.items():
-        fr = [x[2] for x in front(xs) if np.isfinite(x[2])]
+        fr = [x[2] for x in md_front(xs) if np.isfinite(x[2])]
         if fr:
             txt += (f" With MoorDyn stepped every {'1.6 ms' if g == 'fine' else '0.01 s'} alone: "
                     f"{min(fr):.1f}×–{max(fr):.1f}× on its front.")
@@ -1341,7 +1340,7 @@ def main(argv=None):
             cfg["paired_pairs"] = args.retime
         if cfg["key"] in loaded:
             runs, refs, check, md_info = loaded[cfg["key"]]
-            if args.retime and cfg.get("moordyn"):
+            if args.retime and cfg.get("paired_pairs"):       # the shared deck only, as in a study
                 check["paired_front"] = paired_front(cfg, runs, args.retime, log)
         else:
             runs, refs, check, md_info = study(cfg, log)

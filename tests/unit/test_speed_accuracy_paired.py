@@ -73,6 +73,7 @@ def test_paired_front_retimes_each_front_point_alternately(sa, monkeypatch):
     assert out[0]["study_ratio"] == pytest.approx(6000 / 300)          # the study's single timings, for comparison
     text = sa.paired_text(out)
     assert "does not hold" in text and f"{10000 / 590:.1f}×" in text   # lowest median 16.9× < 20×
+    assert "4 alternating rounds" in text and "--retime 4" in text and "within 1.5×" in text   # what was run
     assert "holds in this run" in sa.paired_text([dict(out[0], median=20.0)])
     # without the study's settled MoorDyn state (results re-drawn with --load) it is settled again, as the study
     # settles it; a run without its setup record (an older pickle) is skipped, not guessed
