@@ -5,10 +5,14 @@ per control step), random actions drawn in advance, evaluation sea 4 (coastal SS
 
 * single env steps/s, unwrapped and through ``gym.make`` (Gymnasium's checker/order wrappers) — median of
   ``--repeats`` runs of ``--steps`` steps, by process CPU time (min–max and the wall-clock median too);
-* the compiled step alone: the batch kernel for one copy with the same commands, one control step per call, no
-  Python around it but the stepper's; and the physics alone, the zero-overhead bound: the same kernel advancing
-  ``PHYSICS_CALL_STEPS`` control steps' worth of physics per call (per-call costs spread over them), and where a
-  single env step's time goes (physics, per-call compiled costs, Python);
+* the compiled step alone: the batch kernel for one copy with a fixed command, one control step per call, no
+  Python around it but the stepper's; the physics alone: the same kernel advancing ``PHYSICS_CALL_STEPS`` control
+  steps' worth of physics per call (per-call costs spread over them); the compiled step under the episode's
+  commands (each step's random action mapped to commands as the env maps it, then the same call): a command that
+  changes every control step costs the physics more Newton iterations (printed) than a fixed one, so the
+  zero-overhead bound of the env step is the physics alone plus what the changing commands add (the difference of
+  the two compiled-step runs: the same calls); and where a single env step's time goes (that physics, per-call
+  compiled costs, Python around it — until 2026-12-07 the added physics was counted as Python);
 * reset time: ``env.reset(seed=i)`` with a new random sea each time (sea synthesis, ``Simulator.reset``,
   the first tow-point block, the first observation) — median of 200;
 * the batched vector env (``gym.make_vec(..., vectorization_mode="vector_entry_point")``, one numba call per
@@ -79,6 +83,8 @@ def bench_single(env_id, steps, repeats):
         for _ in range(steps):
             st.step(env.substeps, env.ACT_KIND)
     out["kernel"] = _rate(kernel_only, steps, repeats)
+    commanded = _commanded_kernel(env, acts)
+    out["kernel_cmd"] = _rate(commanded, steps, repeats)
     per_call = PHYSICS_CALL_STEPS * env.substeps          # physics steps per call of the zero-overhead bound
     calls = max(1, steps // PHYSICS_CALL_STEPS)
 
@@ -87,6 +93,7 @@ def bench_single(env_id, steps, repeats):
         for _ in range(calls):
             st.step(per_call, env.ACT_KIND)
     out["physics"] = _rate(physics_only, calls * PHYSICS_CALL_STEPS, repeats)
+    out["iterations"] = {"commanded": _iterations(env, commanded), "fixed": _iterations(env, kernel_only)}
     ts = []
     for i in range(200):
         t0 = time.process_time()
@@ -102,6 +109,35 @@ def bench_single(env_id, steps, repeats):
     out["reset_sim_us"] = statistics.median(ts) * 1e6
     made.close()
     return out
+
+
+def _commanded_kernel(env, acts):
+    """A run of the compiled step alone under the episode's commands: each step's action mapped to actuator
+    commands as :meth:`TowEnv.step` maps it (``_commands``: clean, clip, scale or log-map), then the stepper's
+    call; no observation, reward, info or Python step around it. A command that changes every control step
+    costs the physics more Newton iterations than the fixed command of ``kernel_only`` (the actuator's jump
+    must propagate through the cable), so this — not the fixed-command run — is the step's physics under the
+    same actions as the env run."""
+    rows = env._rows
+    st, A, amap = rows.stepper, rows.actions, rows.amap
+    i = env._row
+    idx = np.array([i])
+
+    def f():
+        env.reset(seed=0, options={"eval_index": 4})
+        for a in acts:
+            A[i] = a
+            env._commands(A, idx, st.U, amap)
+            st.step(env.substeps, env.ACT_KIND)
+    return f
+
+
+def _iterations(env, run):
+    """Newton iterations per physics step of one ``run()`` (the simulator's counters)."""
+    from towenv.core import layout as L
+    run()                                   # (resets first; the counters are read after it)
+    c = env.sim.kernel_data().counters
+    return float(c[L.N_ITERATIONS]) / max(float(c[L.N_STEPS]), 1.0)
 
 
 def _vec_rate(venv, steps, repeats, wall=False):
@@ -201,6 +237,12 @@ def bench_paired(env_id, steps, repeats):
         for _ in range(k):
             st.step(n, env.ACT_KIND)
         return time.process_time() - c0
+    commanded = _commanded_kernel(env, acts)
+
+    def cpu_commanded():
+        c0 = time.process_time()
+        commanded()                            # (its reset is counted: one reset in `steps` steps)
+        return time.process_time() - c0
     cpu(env, acts, options={"eval_index": 4})
     ratios, parts = [], []
     for _ in range(max(3, 2 * repeats)):
@@ -208,13 +250,18 @@ def bench_paired(env_id, steps, repeats):
         te = cpu(env, acts, options={"eval_index": 4}) / steps
         tk = cpu_kernel(env.substeps, steps) / steps
         tph = cpu_kernel(per_call, calls) / (calls * PHYSICS_CALL_STEPS)
+        tkc = cpu_commanded() / steps
         ratios.append(te / tp)
-        parts.append((te / tp, tph / tp, (tk - tph) / tp, (te - tk) / tp, 1e6 * te, 1e6 * tph, 1e6 * (tk - tph),
-                      1e6 * (te - tk)))
+        # the step's physics under the episode's commands (the zero-overhead bound): the fixed-command physics
+        # plus what the changing commands add (commanded − fixed-command compiled step: the same calls)
+        tb = tph + (tkc - tk)
+        parts.append((te / tp, tb / tp, (tk - tph) / tp, (te - tkc) / tp, 1e6 * te, 1e6 * tb, 1e6 * (tk - tph),
+                      1e6 * (te - tkc), 1e6 * tph, 1e6 * (tkc - tk), tph / tp))
     made.close()
-    # per-pair figures: [env step, physics alone, per-call compiled costs, Python] as multiples of the pair's
-    # Pendulum step, then the same in µs; medians over the pairs
-    med = [statistics.median(p[j] for p in parts) for j in range(8)]
+    # per-pair figures: [env step, physics under the episode's commands, per-call compiled costs, Python] as
+    # multiples of the pair's Pendulum step, then the same in µs, then the fixed-command physics and what the
+    # changing commands add (µs) and the fixed-command physics as a multiple; medians over the pairs
+    med = [statistics.median(p[j] for p in parts) for j in range(11)]
     return statistics.median(ratios), min(ratios), max(ratios), med
 
 
@@ -248,14 +295,21 @@ def main(argv=None):
     for env_id, s in singles.items():
         print(f"| {env_id} | {fmt(s['unwrapped'])} | {fmt(s['gym.make'])} | {fmt(s['kernel'])} | {fmt(s['physics'])} | "
               f"{s['reset_ms']:.2f} | {s['reset_sim_us']:.1f} |")
-    print("\nWhere a single (unwrapped) env step goes, µs of CPU (medians above): physics of the control step "
-          "(the bound: physics alone) + per-call costs of the compiled step (kernel + gather − physics alone) + "
-          "Python around it (unwrapped − kernel + gather)\n")
-    print("| environment | env step | physics | per-call compiled step costs | Python around it |")
-    print("|---|---|---|---|---|")
+    print("\nWhere a single (unwrapped) env step goes, µs of CPU (medians above): the physics of the control step "
+          "under the episode's random commands (the zero-overhead bound) = physics alone (fixed command) + what the "
+          "changing commands add (compiled step under the episode's commands − compiled step alone: the same calls, "
+          "more Newton iterations) ; per-call costs of the compiled step (kernel + gather − physics alone); Python "
+          "around it (unwrapped − compiled step under the episode's commands). Newton iterations per physics step "
+          "in the last column\n")
+    print("| environment | env step | physics under the episode's commands | of which fixed-command physics | "
+          "added by the changing commands | per-call compiled step costs | Python around it | Newton iterations "
+          "per step (episode's / fixed commands) |")
+    print("|---|---|---|---|---|---|---|---|")
     for env_id, s in singles.items():
-        e, k, ph = (1e6 / s[key][0] for key in ("unwrapped", "kernel", "physics"))
-        print(f"| {env_id} | {e:.1f} | {ph:.1f} | {k - ph:.1f} | {e - k:.1f} |")
+        e, k, kc, ph = (1e6 / s[key][0] for key in ("unwrapped", "kernel", "kernel_cmd", "physics"))
+        it = s["iterations"]
+        print(f"| {env_id} | {e:.1f} | {ph + kc - k:.1f} | {ph:.1f} | {kc - k:.1f} | {k - ph:.1f} | {e - kc:.1f} | "
+              f"{it['commanded']:.2f} / {it['fixed']:.2f} |")
     print("\n## Batched vector env, `vector_entry_point` (total env-steps/s)\n")
     heads = [f"N = {n}" for n in args.sizes]
     print("| environment | mode | " + " | ".join(heads) + " |")
@@ -271,23 +325,25 @@ def main(argv=None):
     print(f"Pendulum-v1: unwrapped {fmt(pend['unwrapped'])}, gym.make {fmt(pend['gym.make'])} steps/s\n")
     nmax = max(args.sizes)
     print(f"| environment | single, unwrapped | single, gym.make | batched serial N = {nmax} | single, unwrapped, "
-          f"alternating runs (median, min–max of per-pair ratios) | physics alone, alternating (zero-overhead bound) |")
-    print("|---|---|---|---|---|---|")
+          f"alternating runs (median, min–max of per-pair ratios) | physics under the episode's commands, alternating "
+          f"(zero-overhead bound) | physics alone, fixed command |")
+    print("|---|---|---|---|---|---|---|")
     paired = {}
     for env_id, s in singles.items():
         pr = bench_paired(env_id, args.steps, args.repeats)
         paired[env_id] = pr[3]
         print(f"| {env_id} | {pend['unwrapped'][0] / s['unwrapped'][0]:.2f}× | {pend['gym.make'][0] / s['gym.make'][0]:.2f}× "
               f"| {pend['unwrapped'][0] / vecs[env_id][('batched', nmax)][0]:.2f}× | {pr[0]:.2f}× ({pr[1]:.2f}–{pr[2]:.2f}) "
-              f"| {pr[3][1]:.2f}× |")
+              f"| {pr[3][1]:.2f}× | {pr[3][10]:.2f}× |")
     print("\nThe single env step in the alternating runs, split as above (median over the pairs of each part's CPU "
           "time, in µs and as a multiple of the pair's Pendulum-v1 step; the parts need not add up to the median "
           "total):\n")
-    print("| environment | env step | physics alone | per-call compiled step costs | Python around it |")
+    print("| environment | env step | physics under the episode's commands (fixed-command physics + added) | "
+          "per-call compiled step costs | Python around it |")
     print("|---|---|---|---|---|")
     for env_id, m in paired.items():
-        print(f"| {env_id} | {m[4]:.1f} µs ({m[0]:.2f}×) | {m[5]:.1f} µs ({m[1]:.2f}×) | {m[6]:.1f} µs ({m[2]:.2f}×) "
-              f"| {m[7]:.1f} µs ({m[3]:.2f}×) |")
+        print(f"| {env_id} | {m[4]:.1f} µs ({m[0]:.2f}×) | {m[5]:.1f} µs ({m[1]:.2f}×; {m[8]:.1f} + {m[9]:.1f}) "
+              f"| {m[6]:.1f} µs ({m[2]:.2f}×) | {m[7]:.1f} µs ({m[3]:.2f}×) |")
     print(f"\n## Python loops over N = {args.loop_envs} single envs, for comparison (total env-steps/s)\n")
     names = list(next(iter(loops.values())))
     print("| environment | " + " | ".join(names) + " |")
