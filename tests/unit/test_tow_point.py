@@ -66,3 +66,30 @@ def test_one_aligned_block_with_its_mean_track_equals_the_general_path():
         one = path.mean_path(t[part])
         for a, b in zip(both, one):
             np.testing.assert_array_equal(a[part], b)
+
+
+def test_an_exact_path_is_evaluated_in_one_call_per_block_with_the_same_bits():
+    """Without a sea-state vessel motion (here the peer deck's sinusoidal heave) no block can use the recurrence:
+    the buffer evaluates a whole range in one ``path.position`` call (was one call per 128 steps, ~50 µs of numpy
+    calls each) and the Simulator keeps its long block at every Δt — the same numbers, bit for bit, as the
+    evaluation 128 steps at a time."""
+    from towenv.core.tow_point import BLOCK
+    from towenv.peer.decks import shared_deck
+    sim = towenv.make_simulator(shared_deck(segments=20), method="houbolt", dt=0.05)
+    buf = TowPointBuffer(sim)
+    assert not buf.recurrence_possible()
+    assert TowPointBuffer(towenv.Simulator("two_part_coastal_ss4")).recurrence_possible()
+    n = 2 * sim._BLOCK + 77
+    one = buf.block(0, n)
+    by_block = np.concatenate([buf._aligned(s, min(BLOCK, n - s)) for s in range(0, n, BLOCK)])
+    np.testing.assert_array_equal(one, by_block)
+    pos, mean = buf.block(5, 300, mean=True)
+    np.testing.assert_array_equal(pos, one[5:305])
+    x, psi, _ = sim.path.mean_path(np.arange(5, 305) * sim.dt)
+    np.testing.assert_array_equal(mean, np.column_stack([x, psi]))
+    calls = []
+    position = sim.path.position
+    sim.path.position = lambda t: calls.append(len(t)) or position(t)
+    sim.advance_steps(1600)                                  # the deck's 80 s at Δt = 0.05 s: one block
+    assert calls == [sim._BLOCK]
+    np.testing.assert_array_equal(sim._tow_points(1, 1600), one[1:1601])

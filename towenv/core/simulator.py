@@ -684,6 +684,8 @@ class Simulator:
     #: block length (steps) for Δt ≥ 0.05 s: a 2048-step block spans 100–600 s there, and a short run would
     #: pay for evaluating the vessel motion over the whole block (~10 µs per step in an irregular sea)
     _BLOCK_COARSE = 256
+    #: ... but only where the path may use the wave phase recurrence: an exact path (no sea-state vessel motion) costs
+    #: ~0.1 µs per step evaluated in one call (``TowPointBuffer.block``), so it keeps the long block at every Δt
 
     def _tow_point_buffer(self):
         buf = self.__dict__.get("_tp_buffer")
@@ -698,7 +700,8 @@ class Simulator:
         reproducible, and amortise vessel-motion evaluation). In a sea on a straight leg the wave part comes
         from the phase recurrence the environments use (:mod:`towenv.core.tow_point`: ≤ 1e-9 m from the
         exact sum, ~10× cheaper)."""
-        B = self._BLOCK if self.settings.dt < 0.05 else self._BLOCK_COARSE
+        B = self._BLOCK if (self.settings.dt < 0.05 or not self._tow_point_buffer().recurrence_possible()) \
+            else self._BLOCK_COARSE
         cache = self.__dict__.setdefault("_top_blocks", {})
         out = np.empty((n, 3))
         i = 0

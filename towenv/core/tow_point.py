@@ -51,6 +51,15 @@ class TowPointBuffer:
         self.path = sim.path
         self._cache = {}
 
+    def recurrence_possible(self) -> bool:
+        """Whether any block of this path can use the phase recurrence (one sea-state vessel motion, not a
+        record). When not, every step is the exact ``path.position``, which is computed element by element
+        (the same bits for a step whatever range it is evaluated in), so :meth:`block` evaluates a whole
+        range in one call instead of one call per :data:`BLOCK` steps (~50 µs of numpy calls each)."""
+        from ..vessel import TowPointMotion
+        osc = self.path.oscillations
+        return len(osc) == 1 and isinstance(osc[0], TowPointMotion) and not osc[0].is_record
+
     def _linear(self, t_a, t_b):
         """(E at t_a, per-step rotation, gains) if the wave phases are linear in t on [t_a, t_b], else None."""
         from ..vessel import TowPointMotion
@@ -82,6 +91,14 @@ class TowPointBuffer:
         """Positions (count, 3) of steps first … first+count−1. The phase recurrence restarts from an exact
         evaluation at every multiple of BLOCK, so a step's value does not depend on ``first``/``count``.
         With ``mean=True`` also the mean track (count, 4): x, y, z and heading (rad) of the same steps."""
+        if count > 0 and not self.recurrence_possible():
+            # the exact path only: the times as _aligned forms them (integer step numbers times dt), one call
+            t = np.arange(first, first + count) * self.sim.settings.dt
+            out = self.path.position(t)
+            if not mean:
+                return out
+            x, psi, _ = self.path.mean_path(t)
+            return out, np.column_stack([x, psi])
         if first % BLOCK == 0 and 0 < count <= BLOCK:
             # one aligned block (the stepper's refills): its mean track is the one _aligned evaluates, at the
             # same times (first == the block's anchor)
