@@ -111,20 +111,21 @@ def bench_single(env_id, steps, repeats):
     return out
 
 
-def _commanded_kernel(env, acts):
+def _commanded_kernel(env, acts, reset=True):
     """A run of the compiled step alone under the episode's commands: each step's action mapped to actuator
     commands as :meth:`TowEnv.step` maps it (``_commands``: clean, clip, scale or log-map), then the stepper's
     call; no observation, reward, info or Python step around it. A command that changes every control step
     costs the physics more Newton iterations than the fixed command of ``kernel_only`` (the actuator's jump
     must propagate through the cable), so this — not the fixed-command run — is the step's physics under the
-    same actions as the env run."""
+    same actions as the env run. ``reset=False``: the caller resets (to keep the reset out of a timing)."""
     rows = env._rows
     st, A, amap = rows.stepper, rows.actions, rows.amap
     i = env._row
     idx = np.array([i])
 
     def f():
-        env.reset(seed=0, options={"eval_index": 4})
+        if reset:
+            env.reset(seed=0, options={"eval_index": 4})
         for a in acts:
             A[i] = a
             env._commands(A, idx, st.U, amap)
@@ -237,11 +238,12 @@ def bench_paired(env_id, steps, repeats):
         for _ in range(k):
             st.step(n, env.ACT_KIND)
         return time.process_time() - c0
-    commanded = _commanded_kernel(env, acts)
+    commanded = _commanded_kernel(env, acts, reset=False)
 
-    def cpu_commanded():
+    def cpu_commanded():                       # reset outside the timing, as in cpu() and cpu_kernel()
+        env.reset(seed=0, options={"eval_index": 4})
         c0 = time.process_time()
-        commanded()                            # (its reset is counted: one reset in `steps` steps)
+        commanded()
         return time.process_time() - c0
     cpu(env, acts, options={"eval_index": 4})
     ratios, parts = [], []

@@ -93,3 +93,18 @@ def test_an_exact_path_is_evaluated_in_one_call_per_block_with_the_same_bits():
     sim.advance_steps(1600)                                  # the deck's 80 s at Δt = 0.05 s: one block
     assert calls == [sim._BLOCK]
     np.testing.assert_array_equal(sim._tow_points(1, 1600), one[1:1601])
+
+
+def test_the_block_length_follows_set_sea_without_stale_blocks():
+    """The Simulator's block length depends on whether the path can use the recurrence (256 steps in a sea at
+    Δt 0.05 s, 2048 on an exact path): switching the sea off and on again must not serve a block cached under the
+    other length (set_sea drops the cache)."""
+    sim = towenv.Simulator("two_part_coastal_ss4")
+    assert sim.dt >= 0.05
+    steps = 1 + np.arange(600)
+    for sea in (None, {"convention": "coastal", "code": 5}, None):
+        sim.set_sea(sea, seed=3)
+        got = sim._tow_points(1, 600)
+        exact = sim.path.position(steps * sim.dt)
+        assert np.abs(got - exact).max() < 1e-9
+        assert sim._tow_point_buffer().recurrence_possible() is (sea is not None)
