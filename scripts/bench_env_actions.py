@@ -67,6 +67,8 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=2000, help="control steps per run (default 2000)")
     ap.add_argument("--pairs", type=int, default=8, help="alternating rounds (default 8)")
     a = ap.parse_args(argv)
+    if a.steps < 1 or a.pairs < 1:
+        ap.error(f"--steps and --pairs must be ≥ 1 (got --steps {a.steps}, --pairs {a.pairs})")
     import gymnasium as gym
     import numba
     import towenv.envs  # noqa: F401  (registers the ids)
