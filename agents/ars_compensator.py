@@ -76,6 +76,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from .common import (COMPENSATOR_ID, ObsReader, add_parallel_flag, nearest_key, read_ars_file, reset_copies,
                      save_ars_file)
@@ -452,13 +453,37 @@ class ARSCompensatorPolicy:
 
 
 # ============================================================================ batched rollouts (training)
-def _to_action(g, lo, hi):
-    """``CompensatorGainsEnv._to_action`` element-wise, with ``math.log`` (the single env's arithmetic)."""
+def _to_action_py(g, lo, hi):
+    """``CompensatorGainsEnv._to_action`` element-wise, with ``math.log`` (the single env's arithmetic): the plain
+    Python twin of :func:`_to_action`."""
     if hi <= lo:
         return np.full(len(g), -1.0)
     den = math.log(hi / lo)
     x = np.array([2.0 * math.log(gi / lo) / den - 1.0 if gi > 0 else -1.0 for gi in g])
     return np.clip(x, -1.0, 1.0)
+
+
+@njit(cache=True)
+def _to_action_kernel(g, lo, hi, out):
+    den = math.log(hi / lo)
+    for i in range(g.shape[0]):
+        gi = g[i]
+        x = 2.0 * math.log(gi / lo) / den - 1.0 if gi > 0 else -1.0
+        if x < -1.0:
+            x = -1.0
+        elif x > 1.0:
+            x = 1.0
+        out[i] = x
+
+
+def _to_action(g, lo, hi):
+    """:func:`_to_action_py` compiled (numba's ``math.log`` is the C library's, as Python's: the same bits, tested):
+    the list of ``math.log`` calls was ~4 % of a Gauss–Newton training rollout's wall time on both cores."""
+    if hi <= lo:
+        return np.full(len(g), -1.0)
+    out = np.empty(len(g))
+    _to_action_kernel(np.ascontiguousarray(g, dtype=float), float(lo), float(hi), out)
+    return out
 
 
 class _Batch:

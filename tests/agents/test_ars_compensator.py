@@ -567,3 +567,22 @@ def test_cable_state_probe_scores_a_known_linear_response():
         noise.append({"u": x, "fish_heave_dev": rng.standard_normal(1500)})
     assert script.loo_r2(eps, ("u",), lags=20, start=100) > 0.999
     assert script.loo_r2(noise, ("u",), lags=20, start=100) < 0.05
+
+
+def test_compiled_gain_to_action_map_is_the_single_envs_bit_for_bit(env):
+    """The batched skyhook law's gain → action map (compiled, ``AC._to_action``) gives the single environment's
+    ``_to_action`` (Python ``math.log``) and its plain twin bit for bit, on both maps: gains inside, at and beyond
+    the ends, zero, negative and NaN."""
+    rng = np.random.default_rng(4)
+    e = env.unwrapped
+    for mp in (e.stiffness_range, e.damping_range):
+        lo, hi = mp[0], mp[1]
+        g = np.concatenate([np.exp(rng.uniform(np.log(lo) - 1.0, np.log(hi) + 1.0, 5000)),
+                            [lo, hi, 0.0, -3.0, np.nan, np.inf, lo * (1 + 1e-15), hi * (1 - 1e-15)]])
+        got = AC._to_action(g, lo, hi)
+        np.testing.assert_array_equal(got, AC._to_action_py(g, lo, hi))
+        real = ~np.isnan(g)              # (a NaN gain: -1 in the batched map, NaN in the single env's; never given)
+        single = np.array([type(e)._to_action(float(x), mp) for x in g[real]])
+        np.testing.assert_array_equal(got[real], single)
+        assert ((got > -1.0) & (got < 1.0)).sum() > 2000          # most gains map inside the action box
+    np.testing.assert_array_equal(AC._to_action(np.array([5.0, 7.0]), 2.0, 2.0), [-1.0, -1.0])

@@ -108,3 +108,62 @@ def test_the_block_length_follows_set_sea_without_stale_blocks():
         exact = sim.path.position(steps * sim.dt)
         assert np.abs(got - exact).max() < 1e-9
         assert sim._tow_point_buffer().recurrence_possible() is (sea is not None)
+
+
+def test_a_span_of_blocks_equals_its_blocks_bit_for_bit():
+    """``TowPointBuffer.span`` (the stepper's refill: several aligned blocks with their exact anchors in one
+    vectorised call) gives the positions and mean track of ``block`` block by block, bit for bit — on a straight
+    leg (the vectorised anchors are used) and across a turn in a sea (the span falls back to block by block)."""
+    from towenv.core.tow_point import BLOCK
+    straight = towenv.Simulator("two_part_coastal_ss4")
+    scene = towenv.load_scene("two_part_coastal_ss4").with_overrides(
+        **{"vessel.manoeuvres": [{"type": "turn", "start_time": 40.0, "radius": 300.0, "angle_deg": 90.0}]})
+    turning = towenv.Simulator(scene)
+    for sim, firsts in ((straight, (0, 4 * BLOCK, 37 * BLOCK)), (turning, (0, 4 * BLOCK, 40 * BLOCK))):
+        dt = sim.dt
+        for first in firsts:
+            tp = TowPointBuffer(sim)
+            assert tp.recurrence_possible()
+            pos, mean = tp.span(first, 4)
+            assert pos.shape == (4 * BLOCK, 3) and mean.shape == (4 * BLOCK, 4)
+            parts = [TowPointBuffer(sim).block(first + k * BLOCK, BLOCK, mean=True) for k in range(4)]
+            np.testing.assert_array_equal(pos, np.concatenate([p for p, _m in parts]))
+            np.testing.assert_array_equal(mean, np.concatenate([m for _p, m in parts]))
+            t = (first + np.arange(4 * BLOCK)) * dt
+            assert np.abs(pos - sim.path.position(t)).max() < 1e-9
+            vectorised = tp._linear_anchors(t[::BLOCK], float(t[-1])) is not None
+            in_turn = sim is turning and t[0] < 40.0 + 300.0 * np.pi / 2 / sim.path.pieces[1].speed and t[-1] > 40.0
+            assert vectorised is not in_turn
+
+
+def test_span_refuses_unaligned_starts():
+    import pytest
+    tp = TowPointBuffer(towenv.Simulator("two_part_coastal_ss4"))
+    for first, nblocks in ((5, 4), (128, 0)):
+        with pytest.raises(ValueError, match="multiple of 128 and nblocks >= 1"):
+            tp.span(first, nblocks)
+
+
+def test_the_stepper_refills_a_span_at_a_time():
+    """An environment's tow-point buffer is refilled once per SPAN physics steps (was once per BLOCK), with the
+    positions the Simulator computes for the same steps."""
+    import gymnasium as gym
+    import towenv.envs  # noqa: F401
+    from towenv.envs import stepper as ST
+    env = gym.make("towenv/CompensatorGains-v0").unwrapped
+    env.reset(seed=2, options={"eval_index": 4})
+    st = env._rows.stepper
+    tp = st._tp[0]
+    calls = []
+    span = tp.span
+    tp.span = lambda first, n: calls.append((first, n)) or span(first, n)
+    steps = 0
+    for _ in range(700):
+        env.step(np.zeros(env.action_space.shape, np.float32))
+        steps += env.substeps
+    assert steps > 2 * ST.SPAN
+    # the reset filled steps 0 … SPAN−1; a refill when a control step first needs step k·SPAN
+    assert calls == [(k * ST.SPAN, ST.SPAN_BLOCKS) for k in range(1, steps // ST.SPAN + 1)]
+    sim = st.sims[0]
+    base = int(st._base[0])
+    np.testing.assert_array_equal(st._blk[0], TowPointBuffer(sim).block(base, 2 * ST.SPAN))
