@@ -28,7 +28,9 @@ environments' case) the wave phases advance linearly in time, so each block is c
 complex exponential at its first step and a phase recurrence ``E_{s+1} = E_s·exp(iΩΔt)`` after that
 (Ω = encounter frequency); otherwise the exact ``TowPointPath.position``. The recurrence differs from the
 exact evaluation by round-off only (≤ 1e-9 m, tested); because blocks are aligned to absolute steps the
-result does not depend on how the caller chunks time, so single and batched environments are bit-identical.
+result does not depend on how the caller chunks time, so single and batched environments are bit-identical. A copy's
+buffer is refilled ``SPAN_BLOCKS`` blocks at a time (:meth:`TowPointBuffer.span`: the blocks' exact anchors in one
+vectorised call, the same values as block by block).
 
 Until issue 16 this module was ``towenv.core.batch``; the core is physics only now.
 """
