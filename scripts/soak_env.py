@@ -27,8 +27,12 @@ import sys
 import time
 from pathlib import Path
 
+# one thread per process (set before numpy/numba load their pools). Loaded into a process that has already loaded
+# numba (a test), NUMBA_NUM_THREADS is left alone: numba re-reads its configuration at every compilation and refuses
+# a thread count that differs from the pool it launched (agents/train.py does the same)
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_v, "1")
+    if _v != "NUMBA_NUM_THREADS" or "numba" not in sys.modules:
+        os.environ.setdefault(_v, "1")
 
 
 

@@ -7,6 +7,7 @@ scripts/soak_env.py.
 from __future__ import annotations
 
 import json
+import os
 import math
 
 import numpy as np
@@ -196,6 +197,18 @@ def test_scripts_have_help():
         with pytest.raises(SystemExit) as e:
             mod.main(["--help"])
         assert e.value.code == 0
+
+
+def test_scripts_loaded_in_process_leave_numba_threads_alone(monkeypatch):
+    """A script loaded into a process that has already loaded numba (a test) must not set NUMBA_NUM_THREADS: numba
+    re-reads its configuration at every compilation and raises when the count differs from its launched pool, so
+    the next compilation anywhere in the process would fail (it did in the test suite once the kernels' caches were
+    partly warm)."""
+    import numba  # noqa: F401
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    for name in ("soak_env", "bench_linear", "tune_ray"):
+        load_script(name)
+        assert "NUMBA_NUM_THREADS" not in os.environ, name
 
 
 def test_soak_quick(tmp_path):
