@@ -34,13 +34,15 @@ import argparse
 import os
 import platform
 import statistics
+import sys
 import time
 
 # BLAS/OpenMP single-threaded (OpenBLAS would spin a second thread in small matrix products); numba may use
 # --threads threads, but only the prange variant uses more than one
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
-os.environ.setdefault("NUMBA_NUM_THREADS", str(os.cpu_count() or 1))
+if "numba" not in sys.modules:      # loaded into a process with numba loaded (a test): leave its thread count alone
+    os.environ.setdefault("NUMBA_NUM_THREADS", str(os.cpu_count() or 1))
 
 import numpy as np  # noqa: E402
 

@@ -206,7 +206,7 @@ def test_scripts_loaded_in_process_leave_numba_threads_alone(monkeypatch):
     partly warm)."""
     import numba  # noqa: F401
     monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
-    for name in ("soak_env", "bench_linear", "tune_ray"):
+    for name in ("soak_env", "bench_linear", "tune_ray", "bench_env"):
         load_script(name)
         assert "NUMBA_NUM_THREADS" not in os.environ, name
 
