@@ -167,3 +167,28 @@ def test_the_stepper_refills_a_span_at_a_time():
     sim = st.sims[0]
     base = int(st._base[0])
     np.testing.assert_array_equal(st._blk[0], TowPointBuffer(sim).block(base, 2 * ST.SPAN))
+
+
+def test_a_stepper_pickled_with_block_sized_buffers_refills_and_continues_the_same_trajectory():
+    """A stepper pickled before the span refill (buffers of 2·BLOCK rows) is given buffers of the current size on
+    unpickling and refills them on its next step: the environment continues the uninterrupted run bit for bit."""
+    import pickle
+    import gymnasium as gym
+    import towenv.envs  # noqa: F401
+    from towenv.envs import stepper as ST
+    acts = np.random.default_rng(9).uniform(-1, 1, (700, 2)).astype(np.float32)
+    ref = gym.make("towenv/CompensatorGains-v0").unwrapped
+    ref.reset(seed=5, options={"eval_index": 2})
+    want = [ref.step(a)[0] for a in acts]
+    env = gym.make("towenv/CompensatorGains-v0").unwrapped
+    env.reset(seed=5, options={"eval_index": 2})
+    got = [env.step(a)[0] for a in acts[:300]]
+    st = env._rows.stepper
+    state = st.__getstate__()
+    B = st.num_copies
+    state["_blk"], state["_mblk"] = np.zeros((B, 2 * ST.BLOCK, 3)), np.zeros((B, 2 * ST.BLOCK, 4))   # the old layout
+    st.__setstate__(state)                     # as an unpickled earlier stepper
+    assert st._blk.shape == (B, 2 * ST.SPAN, 3) and not st._filled.any()
+    env2 = pickle.loads(pickle.dumps(env))
+    got += [env2.step(a)[0] for a in acts[300:]]
+    np.testing.assert_array_equal(np.array(got), np.array(want))

@@ -412,4 +412,5 @@ class BatchStepper:
             B = st["_blk"].shape[0]
             st["_blk"], st["_mblk"] = np.zeros((B, 2 * SPAN, 3)), np.zeros((B, 2 * SPAN, 4))
             st["_filled"] = np.zeros(B, bool)
+            st["_base"], st["_end"] = np.zeros(B, np.int64), np.zeros(B, np.int64)   # the kernel asks for a refill
         self.__dict__.update(st)           # the kernel tuples are rebuilt on first use (see _lists)
