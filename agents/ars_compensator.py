@@ -283,6 +283,13 @@ class _Features:
         self.pring = None                   # the predictor's 10 s history ring (n, channels, RING), newest first
         self.pkeys = None                   # the predictor's sea-state key of every row (set by the owner)
 
+    def load_rows(self, source: "_Features", src) -> None:
+        """Every row's history rings set to ``source``'s rows ``src`` (row i ← source row src[i]): a copy loaded
+        from another with ``TowVectorEnv.load_copies`` continues its features too."""
+        for name in ("hist", "chist", "pring"):
+            v = getattr(source, name)
+            setattr(self, name, None if v is None else v[src].copy())
+
     def __call__(self, obs, first: bool):
         r, sc = self.reader, self.scales
         n = obs.shape[0]
@@ -500,6 +507,11 @@ class _Batch:
         self.features = _Features(self.reader, e0.half_stroke, scales, predictor, gates=gate_functions(feature_set),
                                   cable=feature_set in CABLE)
 
+    def load_rows(self, source: "_Batch", src) -> None:
+        """Row i's feature history from ``source``'s row src[i] (:meth:`_Features.load_rows`; the sea states are
+        set with :meth:`set_seas`)."""
+        self.features.load_rows(source.features, np.asarray(src, np.int64))
+
     def set_seas(self, seas):
         from .classical import DEFAULT_SKYHOOK_GAINS
         if self.features.predictor is not None:
@@ -534,22 +546,66 @@ def rollout_series(venv, batch: _Batch, seas, seeds, theta, record_actions: bool
     hits of the whole episode and a per-copy flag of copies that ended early (and with ``record_actions`` the
     actions (T, n, 2) as stepped)."""
     n = venv.num_envs
-    theta = np.asarray(theta, float)
     obs = reset_copies(venv, seas, seeds)
     batch.set_seas(seas)
+    out = _series_arrays(venv.envs[0].max_steps, n, record_actions)
+    _run_steps(venv, batch, obs, np.asarray(theta, float), 0, out, stop_guard)
+    return out
+
+
+def rollout_series_shared(venv_w, batch_w: _Batch, venv, batch: _Batch, seas, seeds, theta_w, theta, warm_steps: int,
+                          stop_guard: float = 0.0):
+    """:func:`rollout_series` of every copy i of ``venv`` — episode e = i mod n_w of the ``n_w`` = ``venv_w.num_envs``
+    episodes (seas[e], seeds[e]), weights theta[i] — whose first ``warm_steps`` control steps are *shared*: run once per
+    episode in ``venv_w`` with weights ``theta_w[e]`` and loaded into every copy of that episode
+    (``TowVectorEnv.load_copies``; the features' history rows likewise), which then continues with its own weights.
+    The rows before ``warm_steps`` are the warm-up's. With theta[i] = theta_w[i mod n_w] for every i the result is
+    :func:`rollout_series` under those weights, bit for bit (tested); the warm-up's cost is paid n_w times instead
+    of n."""
+    n_w, n = venv_w.num_envs, venv.num_envs
+    if len(seas) != n_w or len(seeds) != n_w or n % n_w:
+        raise ValueError(f"rollout_series_shared: one (sea, seed) per warm-up copy ({n_w}) and a multiple of "
+                         f"them in venv (got {len(seas)}, {len(seeds)} and {n})")
     T = venv.envs[0].max_steps
-    H = np.zeros((T, n))
-    P = np.zeros((T, n))
-    S = np.zeros((T, n))
-    t = np.zeros(T)
-    hits = np.zeros(n)
-    ended = np.zeros(n, bool)
-    acts = np.zeros((T, n, N_ACT), np.float32) if record_actions else None
-    for k in range(T):
+    if venv_w.envs[0].max_steps != T or not 0 < int(warm_steps) < T:
+        raise ValueError(f"rollout_series_shared: warm_steps must be in 1..{T - 1} and both vector envs' episodes "
+                         f"{T} control steps (got {warm_steps}, {venv_w.envs[0].max_steps})")
+    warm = int(warm_steps)
+    obs_w = reset_copies(venv_w, seas, seeds)
+    batch_w.set_seas(seas)
+    out_w = _series_arrays(T, n_w, False)
+    obs_w = _run_steps(venv_w, batch_w, obs_w, np.asarray(theta_w, float), 0, out_w, stop_guard, stop=warm)
+    reps = n // n_w
+    reset_copies(venv, list(seas) * reps, list(seeds) * reps)
+    batch.set_seas(list(seas) * reps)
+    src = np.arange(n) % n_w
+    venv.load_copies(venv_w, src, np.arange(n))
+    batch.load_rows(batch_w, src)
+    out = _series_arrays(T, n, False)
+    for a, b in zip(out[:4], out_w[:4]):
+        a[:warm] = b[:warm][:, src] if b.ndim == 2 else b[:warm]
+    out[4][:] = out_w[4][src]
+    out[5][:] = out_w[5][src]
+    _run_steps(venv, batch, obs_w[src], np.asarray(theta, float), warm, out, stop_guard)
+    return out
+
+
+def _series_arrays(T, n, record_actions):
+    """The per-step arrays of :func:`rollout_series`: H, P, S (T, n), t (T,), hits (n,), ended (n,), actions."""
+    return (np.zeros((T, n)), np.zeros((T, n)), np.zeros((T, n)), np.zeros(T), np.zeros(n), np.zeros(n, bool),
+            np.zeros((T, n, N_ACT), np.float32) if record_actions else None)
+
+
+def _run_steps(venv, batch: _Batch, obs, theta, start, out, stop_guard, stop=None):
+    """Control steps ``start`` … ``stop`` − 1 (default: to the episode's end) of :func:`rollout_series` from the
+    observations ``obs``, filling ``out`` (:func:`_series_arrays`); returns the last observations."""
+    H, P, S, t, hits, ended, acts = out
+    T = len(t)
+    for k in range(start, T if stop is None else stop):
         phi = batch.features(obs, k == 0)
         a = np.clip(batch.base_action(obs) + _residual(theta, phi), -1.0, 1.0)
         a = _apply_guard(a, batch.reader, obs, stop_guard).astype(np.float32)
-        if record_actions:
+        if acts is not None:
             acts[k] = a
         obs, _r, term, trunc, infos = venv.step(a)
         H[k] = infos["fish_heave"]
@@ -559,7 +615,7 @@ def rollout_series(venv, batch: _Batch, seas, seeds, theta, record_actions: bool
         hits += np.where(ended, 0, infos["end_stop_hits"])
         if k < T - 1:
             ended |= term | trunc
-    return H, P, S, t, hits, ended, acts
+    return obs
 
 
 def rollout_batch(venv, batch: _Batch, seas, seeds, theta, discard: float = 60.0, record_actions: bool = False,

@@ -23,6 +23,15 @@ Gauss–Newton step in a random coordinate subspace (block-coordinate Gauss–Ne
 all moved weights + 1; the line search is unchanged. ``columns`` equal to the number of moved weights (or None) is
 the full step.
 
+Shared warm-up (``shared_warmup=True``, ``--shared-warmup``): the Jacobian episodes' first ``discard`` seconds are not
+scored, yet each of the K + 1 copies of an episode ran them. With the shared warm-up they run once per episode under
+Θ (:func:`warmup_steps` control steps: every row before the scored window) and the state is branched into the
+episode's copies (``TowVectorEnv.load_copies``, bit for bit the continuation: tested), which then run the scored
+window with their own weights — about a third less Jacobian work at 180 s episodes scored after 60 s. The Jacobian
+is then the scored window's sensitivity to the weights *from the state Θ reached at the window's start*: the effect
+of a perturbed warm-up on that state (decaying over the system's memory, seconds) is left out
+(``scripts/bench_shared_warmup.py`` measures both). The line search is unchanged.
+
 Options: ``feature_set="hq"`` with a ``predictor`` (the init's weights copied by feature name, the predicted ones
 starting at 0), and ``free="predicted"`` to move only the predicted features' weights (the Jacobian then has one column
 per moved weight); ``feature_set="hs"`` (the skyhook-gated copy of the features, starting at 0) with ``free="gated"``
@@ -117,7 +126,7 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
           stop_guard: float | None = None, episode_seconds: float = 180.0, discard: float = 60.0, entries=None,
           init: arc.ARSCompensatorPolicy | None = None, progress: bool = True, feature_set: str | None = None,
           predictor=None, free: str = "all", parallel: bool = False, columns: int | None = None,
-          log=print) -> arc.ARSCompensatorPolicy:
+          shared_warmup: bool = False, log=print) -> arc.ARSCompensatorPolicy:
     """Gauss–Newton search (module docstring) from Θ = 0 (skyhook) or from ``init`` (its weights copied by feature
     name; features it does not have start at 0). Stops after ``iterations`` (continuing a Gauss–Newton ``init``'s
     count, so its wave seeds stay fresh) or when the next iteration would pass ``minutes`` of wall time.
@@ -128,7 +137,9 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     (hs) features' (:func:`free_mask`; the Jacobian then perturbs only those, which makes an iteration cheaper).
     ``parallel``: step the batches on all numba threads (the same result bit for bit, less wall time). ``columns``:
     None = a Jacobian column per moved weight; K = K of them per iteration, drawn at random (:func:`column_subset`,
-    the step moves only those)."""
+    the step moves only those). ``shared_warmup``: the Jacobian episodes' unscored first ``discard`` seconds run once
+    per episode under Θ and are branched into the perturbed copies (:func:`warmup_steps`,
+    ``arc.rollout_series_shared``; the module docstring)."""
     __import__("towenv")
     from towenv.envs.vector import CompensatorGainsVectorEnv
     from .baselines import load_tuned
@@ -164,14 +175,19 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=float(episode_seconds),
               parallel=bool(parallel))
     venv_j = CompensatorGainsVectorEnv(num_envs=n_jac, **kw)
+    warm = warmup_steps(venv_j.envs[0].max_steps, venv_j.envs[0].dt, discard) if shared_warmup else 0
+    venv_w = CompensatorGainsVectorEnv(num_envs=n_ep, **kw) if warm else None
     venv_l = CompensatorGainsVectorEnv(num_envs=n_ls, **kw)
     scales = dict(init.scales) if init is not None else dict(arc.FEATURE_SCALES)
     batch_j = arc._Batch(venv_j, table, scales, fs, predictor)
     batch_l = arc._Batch(venv_l, table, scales, fs, predictor)
+    batch_w = arc._Batch(venv_w, table, scales, fs, predictor) if warm else None
     curve = []
     log(f"[gn_comp] seed {seed}: feature set {fs}, {C} sea states, {NA} x {NF} weights each ({len(moved_idx)} moved: {free})"
         + (f"; {NW} random Jacobian columns of them per iteration" if NW < len(moved_idx) else "")
         + f"; per iteration {n_ep} episodes x ({NW} + 1) "
+        + (f"(their first {warm} control steps shared: run once per episode under Θ) " if warm else "")
+        + 
         f"for the Jacobian and {n_ep} x ({len(ridges)} ridges + current + skyhook) for the line search, "
         f"{episode_seconds:g} s each; eps={eps} ridges={ridges} pitch_weight={pitch_weight} hit_weight={hit_weight} "
         f"margin_weight={margin_weight} margin_start={margin_start} stop_guard={guard}"
@@ -192,23 +208,18 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
         th = np.repeat(theta[code].reshape(n_ep, NA * NF)[None], NW + 1, axis=0)
         for i, f in enumerate(free_idx):
             th[i + 1, :, f] += eps
-        H, P, S, t, _hits, ended, _a = arc.rollout_series(venv_j, batch_j, seas * (NW + 1), seeds * (NW + 1),
-                                                          th.reshape(-1, NA, NF), stop_guard=guard)
-        w = t >= discard
-        Y = H[w].reshape(-1, NW + 1, n_ep)
-        Q = P[w].reshape(-1, NW + 1, n_ep)
-        M = arc.margin_penalty(S[w], margin_start).reshape(-1, NW + 1, n_ep) ** 0.5      # m_t = max(|s| − m0, 0)
-        Y = Y - Y.mean(axis=0)
-        Q = Q - Q.mean(axis=0)
-        y0, q0, m0 = Y[:, 0], Q[:, 0], M[:, 0]
-        Jy = (Y[:, 1:] - y0[:, None]) / eps
-        Jq = (Q[:, 1:] - q0[:, None]) / eps
-        Jm = (M[:, 1:] - m0[:, None]) / eps
-        sy, sq = y0.std(axis=0), q0.std(axis=0)
-        ok = ~ended.reshape(NW + 1, n_ep).any(axis=0) & (sy > 0) & (sq > 0)
+        if warm:
+            H, P, S, t, _hits, ended, _a = arc.rollout_series_shared(venv_w, batch_w, venv_j, batch_j, seas, seeds,
+                                                                     th[0].reshape(-1, NA, NF),
+                                                                     th.reshape(-1, NA, NF), warm, stop_guard=guard)
+        else:
+            H, P, S, t, _hits, ended, _a = arc.rollout_series(venv_j, batch_j, seas * (NW + 1), seeds * (NW + 1),
+                                                              th.reshape(-1, NA, NF), stop_guard=guard)
+        if warm and (t[:warm] >= discard).any():  # cannot happen (warmup_steps): the shared rows must be unscored
+            raise RuntimeError(f"shared warm-up: row {int(np.argmax(t >= discard))} is scored but was shared")
         # 2. Gauss–Newton steps per sea state and ridge
-        steps = gauss_newton_steps([(Jy, y0, 1.0 / sy ** 2), (Jq, q0, pitch_weight / sq ** 2),
-                                    (Jm, m0, np.full(n_ep, 2.0 * margin_weight))], code, ok, C, ridges)
+        steps, _J = jacobian_steps((H, P, S, t, ended), NW, discard, eps, margin_start, pitch_weight, margin_weight,
+                                   code, C, ridges)
         # 3. line search on fresh episodes: skyhook, Θ, Θ + Δ(λ) for every λ, on the same waves
         seeds_l = [train_seed(s + 10 * r, it, seed, line_search=True) for (_sea, s), r in zip(ents, reps)]
         full = np.zeros((len(ridges), C, NA * NF))      # the steps of the moved weights, as full Θ steps
@@ -249,10 +260,13 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     steps_per_episode = int(venv_j.envs[0].max_steps)
     venv_j.close()
     venv_l.close()
+    if venv_w is not None:
+        venv_w.close()
+    jac_steps = n_jac * steps_per_episode - (n_jac - n_ep) * warm      # the shared rows run once per episode
     wall = time.perf_counter() - t_start
     meta = {"algo": arc.ALGO, "method": "gauss-newton", "env_id": arc.ENV_ID, "env_kwargs": {},
             "seed": int(seed), "iterations": it - first, "first_iteration": first, "stop_guard": guard,
-            "num_timesteps": (it - first) * (n_jac + n_ls) * steps_per_episode, "wall_seconds": wall,
+            "num_timesteps": (it - first) * (jac_steps + n_ls * steps_per_episode), "wall_seconds": wall,
             "parallel": bool(parallel),
             "init_num_timesteps": int(init.meta.get("num_timesteps", 0)) if init is not None else 0,
             "hyperparameters": {"iterations": iterations, "minutes": minutes, "replicates": R, "eps": eps,
@@ -260,7 +274,8 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
                                 "margin_weight": margin_weight, "margin_start": margin_start,
                                 "episode_seconds": episode_seconds, "discard": discard, "entries": idx,
                                 "init": init.name if init is not None else None, "free": free,
-                                "columns": None if columns is None else int(columns)},
+                                "columns": None if columns is None else int(columns),
+                                "shared_warmup": bool(shared_warmup), "warmup_steps": int(warm)},
             "feature_set": fs,
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)}",
@@ -270,6 +285,38 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
         rest = sorted(set(init.theta) - set(keys))
         out |= {k: row for k, row in zip(rest, initial_theta(init, rest, fs))}
     return arc.ARSCompensatorPolicy(out, table, scales, meta, name=f"gn_comp_s{seed}", predictor=predictor)
+
+
+def jacobian_steps(series, NW: int, discard: float, eps: float, margin_start: float, pitch_weight: float,
+                   margin_weight: float, code, n_codes: int, ridges):
+    """Steps 1–2 of an iteration from the Jacobian rollout ``series`` = (H, P, S, t, ended) of ``rollout_series``
+    (copy block 0 under Θ, block i + 1 with column i perturbed by ``eps``; each block the ``n_ep`` episodes):
+    the Gauss–Newton steps (len(ridges), n_codes, NW) and the heave Jacobian J_y (rows t ≥ discard, NW, n_ep)."""
+    H, P, S, t, ended = series
+    n_ep = H.shape[1] // (NW + 1)
+    w = t >= discard
+    Y = H[w].reshape(-1, NW + 1, n_ep)
+    Q = P[w].reshape(-1, NW + 1, n_ep)
+    M = arc.margin_penalty(S[w], margin_start).reshape(-1, NW + 1, n_ep) ** 0.5      # m_t = max(|s| − m0, 0)
+    Y = Y - Y.mean(axis=0)
+    Q = Q - Q.mean(axis=0)
+    y0, q0, m0 = Y[:, 0], Q[:, 0], M[:, 0]
+    Jy = (Y[:, 1:] - y0[:, None]) / eps
+    Jq = (Q[:, 1:] - q0[:, None]) / eps
+    Jm = (M[:, 1:] - m0[:, None]) / eps
+    sy, sq = y0.std(axis=0), q0.std(axis=0)
+    ok = ~ended.reshape(NW + 1, n_ep).any(axis=0) & (sy > 0) & (sq > 0)
+    steps = gauss_newton_steps([(Jy, y0, 1.0 / sy ** 2), (Jq, q0, pitch_weight / sq ** 2),
+                                (Jm, m0, np.full(n_ep, 2.0 * margin_weight))], code, ok, n_codes, ridges)
+    return steps, Jy
+
+
+def warmup_steps(max_steps: int, dt: float, discard: float) -> int:
+    """Control steps of an episode's shared warm-up: the leading steps whose row (the state after step k, at
+    t = (k + 1)·dt) lies before ``discard`` with a margin of 1e-6 s, so that no scored row is shared (the trainer
+    checks the rows' recorded times too). ``max_steps`` − 1 at most."""
+    k = int(np.sum(np.arange(1, int(max_steps) + 1) * float(dt) < float(discard) - 1e-6))
+    return max(0, min(k, int(max_steps) - 1))
 
 
 def default_export(seed: int) -> Path:
@@ -314,6 +361,9 @@ def main(argv=None) -> int:
     ap.add_argument("--columns", type=int, default=None,
                     help="Jacobian columns per iteration: K of the moved weights drawn at random each iteration "
                          "(default: all of them)")
+    ap.add_argument("--shared-warmup", action="store_true",
+                    help="run each Jacobian episode's unscored first --discard seconds once, under the current "
+                         "weights, and branch it into the perturbed copies (about a third less Jacobian work)")
     add_parallel_flag(ap)
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
     a = ap.parse_args(argv)
@@ -346,7 +396,7 @@ def main(argv=None) -> int:
         pol = train(a.seed, a.iterations, a.minutes, a.replicates, a.eps, a.ridges, a.pitch_weight, a.hit_weight,
                     a.margin_weight, stop_guard=a.stop_guard, init=init, entries=a.entries, feature_set=a.features,
                     predictor=predictor, free=a.free, parallel=a.parallel,
-                    columns=a.columns)
+                    columns=a.columns, shared_warmup=a.shared_warmup)
     except ValueError as e:
         ap.error(str(e))
     arc.save_policy(pol, out)

@@ -586,3 +586,66 @@ def test_gated_continuations_carry_their_recipe_and_act(seed, family, parent, fs
         runs = load_script("training_cost").chain(base / f"{family}_CompensatorGains-v0_s{seed}.npz")
         assert [r[0].split("_")[0] for r in runs] == ["arsp", "gnp", "gnsp", "gnspf", "gnspfr"]
         assert sum(r[1] for r in runs) < 3600.0
+
+
+def _shared_setup(n_w, reps, seconds=8.0):
+    from towenv.envs.vector import CompensatorGainsVectorEnv
+    import agents
+    pol = arc.load_policy(Path(agents.__file__).parent / "trained" / "gnspfr_CompensatorGains-v0_s1.npz")
+    kw = dict(autoreset_mode="NextStep", batch_infos=True, episode_seconds=seconds)
+    ev = gym.make(COMP).unwrapped.eval_sea_states()
+    ents = [ev[4], ev[9]][:n_w]
+    seas, seeds = [s for s, _ in ents], [int(w) + 77 for _, w in ents]
+    theta = np.array([pol.theta[arc.nearest_key(pol.theta, s)] for s in seas])
+    envs = [CompensatorGainsVectorEnv(num_envs=n, **kw) for n in (n_w, n_w * reps, n_w * reps)]
+    batches = [arc._Batch(v, pol.base_table, pol.scales, pol.feature_set) for v in envs]
+    return pol, seas, seeds, theta, envs, batches
+
+
+def test_a_shared_warmup_rollout_is_the_plain_rollout_under_the_warmup_weights_bit_for_bit():
+    """``arc.rollout_series_shared``: with every copy keeping its episode's warm-up weights the result is
+    ``rollout_series`` of all copies from the start, bit for bit (fish heave, pitch, stroke, times, hits, ended) —
+    the warm-up loaded into the copies (env state and the features' history rings, here the `hsfo` policy's) is
+    their own continuation; with other weights after the warm-up, the shared rows are the warm-up's and the rest
+    differs."""
+    pol, seas, seeds, theta, (vw, vs, vp), (bw, bs, bp) = _shared_setup(2, 3)
+    T, warm = vw.envs[0].max_steps, 37
+    tiled = np.concatenate([theta] * 3)
+    plain = arc.rollout_series(vp, bp, seas * 3, seeds * 3, tiled, stop_guard=pol.stop_guard)
+    shared = arc.rollout_series_shared(vw, bw, vs, bs, seas, seeds, theta, tiled, warm, stop_guard=pol.stop_guard)
+    for a, b in zip(plain[:6], shared[:6]):
+        assert np.array_equal(a, b)
+    other = tiled.copy()
+    other[2:] += 0.05                                   # copies 2-5 (both episodes) another policy after the warm-up
+    br = arc.rollout_series_shared(vw, bw, vs, bs, seas, seeds, theta, other, warm, stop_guard=pol.stop_guard)
+    H, Hp = br[0], plain[0]
+    assert np.array_equal(H[:, :2], Hp[:, :2])         # copies 0, 1 kept the warm-up weights
+    assert np.array_equal(H[:warm], Hp[:warm])          # the shared rows
+    assert not np.array_equal(H[warm + 5:, 2:], Hp[warm + 5:, 2:])
+    assert T > warm
+    with pytest.raises(ValueError, match="warm_steps"):
+        arc.rollout_series_shared(vw, bw, vs, bs, seas, seeds, theta, tiled, T)
+    with pytest.raises(ValueError, match="one \\(sea, seed\\) per warm-up copy"):
+        arc.rollout_series_shared(vw, bw, vs, bs, seas[:1], seeds[:1], theta, tiled, warm)
+    for v in (vw, vs, vp):
+        v.close()
+
+
+def test_shared_warmup_search_shares_only_unscored_rows_and_counts_its_steps():
+    """``shared_warmup=True``: the Jacobian episodes' first ``warmup_steps`` control steps (every row before the
+    scored window — 599 of 620 at 62 s scored after 60 s) run once per episode; the step count says so, the recipe is
+    in the metadata, and the line search still keeps only improving steps."""
+    assert gnc.warmup_steps(620, 0.1, 60.0) == 599
+    assert gnc.warmup_steps(1800, 0.1, 60.0) == 599
+    assert gnc.warmup_steps(620, 0.1, 0.0) == 0 and gnc.warmup_steps(620, 0.1, 100.0) == 619
+    pol = gnc.train(seed=3, iterations=1, entries=[4], episode_seconds=62.0, discard=60.0, progress=False,
+                    shared_warmup=True, columns=4)
+    hp = pol.meta["hyperparameters"]
+    assert hp["shared_warmup"] is True and hp["warmup_steps"] == 599
+    # 1 episode: 599 shared steps once + (4 + 1) copies x 21 steps, and (3 ridges + 2) line-search copies x 620
+    assert pol.meta["num_timesteps"] == 599 + 5 * 21 + 5 * 620
+    for p in pol.meta["curve"][0]["picks"]:
+        assert p["cost_after"] <= p["cost_current"]
+    with pytest.raises(SystemExit) as ex:
+        gnc.main(["--shared-warmup", "--iterations", "0"])
+    assert ex.value.code == 2

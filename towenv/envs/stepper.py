@@ -239,6 +239,14 @@ class BatchStepper:
         self._count[i] = sim.step_count
         self._refill(i, sim.step_count + 1, 1)
 
+    def load_row(self, i: int, source: "BatchStepper", j: int) -> None:
+        """Copy i's per-copy rows (reference values, measurement row, commands, step count, tow-point buffer) set
+        to ``source``'s copy j's. Copy i's Simulator must already hold copy j's state (``Simulator.restore``) and
+        follow the same path and sea: the buffer's values are then copy i's own."""
+        for name in ("refs", "M", "U", "_res", "_base", "_end", "_count", "_blk", "_mblk", "_filled"):
+            getattr(self, name)[i] = getattr(source, name)[j]
+        self._install(i)                                # (a no-op unless copy i's arrays were replaced)
+
     def _install(self, i):
         """(Re)build copy i's kernel tuples if its Simulator's arrays changed since the last install."""
         sim = self.sims[i]

@@ -32,6 +32,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numba import njit
 
+from ..core import kernels as K
 from . import checks as C
 from . import measurements as MS
 from .base import EnvRows, step_copies
@@ -272,6 +273,72 @@ class TowVectorEnv(VectorEnv):
     def close_extras(self, **kwargs):
         for env in self.envs:
             env.close()
+
+    # ------------------------------------------------------------------ copies continued from others
+    def load_copies(self, source: "TowVectorEnv", src, dst) -> None:
+        """Make copy ``dst[k]`` of this vector env continue exactly as copy ``src[k]`` of ``source`` (this env or
+        another of the same class and keywords) would: after it, the same actions give copy ``dst[k]`` the
+        observations, rewards, flags and infos that copy ``src[k]`` gets, bit for bit. Used to run a shared
+        warm-up once and branch it into many copies (``agents.gn_compensator``'s shared warm-up).
+
+        Both copies must have been reset into the same sea state, wave seed and configuration (speed, cable length)
+        — the waves are the destination's own, only the dynamic state is copied: the Simulator (``snapshot`` /
+        ``restore``, Newton memory and counters included), the stepper's rows (reference values and running
+        means, measurement row, step count, tow-point buffer), the previous and last actions, the action map, the
+        observer's delay ring (a deep copy of the source's observer), the env's random generator state and the
+        vector env's last observation, reward and flags. Not for winch copies (a remesh changes the
+        discretisation; ``ConfigError``). The reward function must keep no per-copy state (the standard
+        ``HeavePitchReward`` keeps none)."""
+        own = type(self).__name__
+        if type(source) is not type(self):
+            raise C.ConfigError(f"{own}.load_copies: source must be a {own} (got {type(source).__name__})")
+        src = [int(i) for i in np.asarray(src, np.int64).reshape(-1)]
+        dst = [int(i) for i in np.asarray(dst, np.int64).reshape(-1)]
+        if len(src) != len(dst):
+            raise C.ConfigError(f"{own}.load_copies: src and dst must have the same length (got {len(src)} "
+                                f"and {len(dst)})")
+        if len(set(dst)) != len(dst):
+            raise C.ConfigError(f"{own}.load_copies: dst must not repeat a copy")
+        for name, ids, n in (("src", src, source.num_envs), ("dst", dst, self.num_envs)):
+            bad = [i for i in ids if not 0 <= i < n]
+            if bad:
+                raise C.ConfigError(f"{own}.load_copies: {name} entries must be in 0..{n - 1} (got {bad[:5]})")
+        if source is self and set(src) & set(dst) - {s for s, d in zip(src, dst) if s == d}:
+            raise C.ConfigError(f"{own}.load_copies: within one vector env a copy cannot be both a source and "
+                                f"another copy's destination")
+        for s, d in zip(src, dst):
+            es, ed = source.envs[s], self.envs[d]
+            if not (source._started[s] and self._started[d]) or es._needs_reset == "failed" or es.sim is None \
+                    or ed.sim is None:
+                raise C.ResetNeeded(f"{own}.load_copies: reset source copy {s} and destination copy {d} first")
+            if es._sea != ed._sea or es._config != ed._config:
+                raise C.ConfigError(f"{own}.load_copies: source copy {s} and destination copy {d} must be reset "
+                                    f"into the same sea state, wave seed and configuration (got {es._sea!r}, "
+                                    f"{es._config!r} and {ed._sea!r}, {ed._config!r})")
+            if es.sim.winch[K.W_MODE] > 0 or ed.sim.winch[K.W_MODE] > 0:
+                raise C.ConfigError(f"{own}.load_copies: copies with a winch cannot be loaded (a remesh changes the "
+                                    f"discretisation)")
+        rs, rd = source.rows, self.rows
+        for s, d in zip(src, dst):
+            if source is self and s == d:
+                continue
+            es, ed = source.envs[s], self.envs[d]
+            ed.sim.restore(es.sim.snapshot())
+            ed.sim.counters[:] = es.sim.counters
+            rd.stepper.load_row(d, rs.stepper, s)
+            for name in ("actions", "prev_action", "amap"):
+                getattr(rd, name)[d] = getattr(rs, name)[s]
+            if rs.preview is not None and rd.preview is not None:
+                rd.preview[d] = rs.preview[s]
+            ed.observer = copy.deepcopy(es.observer)
+            ed.np_random.bit_generator.state = es.np_random.bit_generator.state
+            ed._needs_reset = es._needs_reset
+            ed._plan = None
+            self._obs[d] = source._obs[s]
+            self._rew[d] = source._rew[s]
+            self._term[d] = source._term[s]
+            self._trunc[d] = source._trunc[s]
+            self._autoreset[d] = source._autoreset[s]
 
     # ------------------------------------------------------------------ SyncVectorEnv-style helpers
     def call(self, name: str, *args, **kwargs) -> tuple:
