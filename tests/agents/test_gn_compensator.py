@@ -649,3 +649,31 @@ def test_shared_warmup_search_shares_only_unscored_rows_and_counts_its_steps():
     with pytest.raises(SystemExit) as ex:
         gnc.main(["--shared-warmup", "--iterations", "0"])
     assert ex.value.code == 2
+
+
+def test_the_shared_warmup_chain_of_seed_0_carries_its_recipe_and_fits_the_hour():
+    """``gnw`` → ``gnws`` → ``gnwsf`` → ``gnwsfo`` seed 0 (docs/agents.md "The headline's stages within the hour"): the
+    headline ``gnsfo``'s stage structure from the shared ARS start (``arsp`` seed 0), every stage with the shared
+    warm-up (599 shared control steps), each gated stage keeping its parent's weights and moving only its own copy's,
+    the chain under an hour of iterations (scripts/training_cost.py), and the last stage acting in the action box."""
+    import agents
+    base = Path(agents.__file__).parent / "trained"
+    stages = [("gnw", "arsp", "h", "all"), ("gnws", "gnw", "hs", "gated"), ("gnwsf", "gnws", "hsf", "fish"),
+              ("gnwsfo", "gnwsf", "hsfo", "outward")]
+    for family, parent, fs, free in stages:
+        pol = arc.load_policy(base / f"{family}_CompensatorGains-v0_s0.npz")
+        init = arc.load_policy(base / f"{parent}_CompensatorGains-v0_s0.npz")
+        hp = pol.meta["hyperparameters"]
+        assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == 0 and pol.feature_set == fs
+        assert (hp["shared_warmup"], hp["warmup_steps"], hp["free"], hp["replicates"], hp["columns"]) == (
+            True, 599, free, 2, None)
+        assert hp["init"] == f"{parent}_CompensatorGains-v0_s0" and pol.meta["parallel"] is True
+        assert pol.stop_guard == init.stop_guard == 0.9
+        if free != "all":
+            n_parent = arc.n_features(init.feature_set)
+            assert all(np.array_equal(pol.theta[k][:, :n_parent], init.theta[k]) for k in init.theta)
+            assert any(np.any(pol.theta[k][:, n_parent:] != 0.0) for k in pol.theta)
+    runs = load_script("training_cost").chain(base / "gnwsfo_CompensatorGains-v0_s0.npz")
+    assert [r[0].split("_")[0] for r in runs] == ["arsp", "gnw", "gnws", "gnwsf", "gnwsfo"]
+    assert sum(r[1] for r in runs) < 3600.0
+    _assert_acts_in_box_and_unlike(pol, init)
