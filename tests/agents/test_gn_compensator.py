@@ -651,8 +651,9 @@ def test_shared_warmup_search_shares_only_unscored_rows_and_counts_its_steps():
     assert ex.value.code == 2
 
 
-def test_the_shared_warmup_chain_of_seed_0_carries_its_recipe_and_fits_the_hour():
-    """``gnw`` → ``gnws`` → ``gnwsf`` → ``gnwsfo`` seed 0 (docs/agents.md "The headline's stages within the hour"): the
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_shared_warmup_chains_carry_their_recipe_and_fit_the_hour(seed):
+    """``gnw`` → ``gnws`` → ``gnwsf`` → ``gnwsfo`` seeds 0 and 1 (docs/agents.md "The headline's stages within the hour"): the
     headline ``gnsfo``'s stage structure from the shared ARS start (``arsp`` seed 0), every stage with the shared
     warm-up (599 shared control steps), each gated stage keeping its parent's weights and moving only its own copy's,
     the chain under an hour of iterations (scripts/training_cost.py), and the last stage acting in the action box."""
@@ -661,19 +662,19 @@ def test_the_shared_warmup_chain_of_seed_0_carries_its_recipe_and_fits_the_hour(
     stages = [("gnw", "arsp", "h", "all"), ("gnws", "gnw", "hs", "gated"), ("gnwsf", "gnws", "hsf", "fish"),
               ("gnwsfo", "gnwsf", "hsfo", "outward")]
     for family, parent, fs, free in stages:
-        pol = arc.load_policy(base / f"{family}_CompensatorGains-v0_s0.npz")
-        init = arc.load_policy(base / f"{parent}_CompensatorGains-v0_s0.npz")
+        pol = arc.load_policy(base / f"{family}_CompensatorGains-v0_s{seed}.npz")
+        init = arc.load_policy(base / (f"{parent}_CompensatorGains-v0_s0.npz" if parent == "arsp" else f"{parent}_CompensatorGains-v0_s{seed}.npz"))
         hp = pol.meta["hyperparameters"]
-        assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == 0 and pol.feature_set == fs
+        assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == fs
         assert (hp["shared_warmup"], hp["warmup_steps"], hp["free"], hp["replicates"], hp["columns"]) == (
             True, 599, free, 2, None)
-        assert hp["init"] == f"{parent}_CompensatorGains-v0_s0" and pol.meta["parallel"] is True
+        assert hp["init"] == (f"{parent}_CompensatorGains-v0_s0" if parent == "arsp" else f"{parent}_CompensatorGains-v0_s{seed}") and pol.meta["parallel"] is True
         assert pol.stop_guard == init.stop_guard == 0.9
         if free != "all":
             n_parent = arc.n_features(init.feature_set)
             assert all(np.array_equal(pol.theta[k][:, :n_parent], init.theta[k]) for k in init.theta)
             assert any(np.any(pol.theta[k][:, n_parent:] != 0.0) for k in pol.theta)
-    runs = load_script("training_cost").chain(base / "gnwsfo_CompensatorGains-v0_s0.npz")
+    runs = load_script("training_cost").chain(base / f"gnwsfo_CompensatorGains-v0_s{seed}.npz")
     assert [r[0].split("_")[0] for r in runs] == ["arsp", "gnw", "gnws", "gnwsf", "gnwsfo"]
     assert sum(r[1] for r in runs) < 3600.0
     _assert_acts_in_box_and_unlike(pol, init)
