@@ -1,0 +1,87 @@
+"""scripts/train_compensator_hour.py, the CompensatorGains one-hour recipe in one command (issue 14; docs/agents.md
+"The headline's stages within the hour"): its four stages are the committed ``gnw…`` files' recipes, stage 4 gets
+what the hour leaves (at most 12 min) and is not started when the hour is spent, bad options are refused by name."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from agents import ars_compensator as arc
+from helpers import load_script
+
+TRAINED = Path(arc.__file__).parent / "trained"
+
+
+def _options(args):
+    """``--name value…`` pairs of a command line as {name: [values]} (flags map to [])."""
+    out, key = {}, None
+    for tok in args:
+        if tok.startswith("--"):
+            key = tok[2:]
+            out[key] = []
+        else:
+            out[key].append(tok)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_stages_are_the_committed_chains_recipes(seed, tmp_path):
+    hour = load_script("train_compensator_hour")
+    start = TRAINED / "arsp_CompensatorGains-v0_s0.npz"
+    for k, family in enumerate(["gnw", "gnws", "gnwsf", "gnwsfo"]):
+        meta = arc.load_policy(TRAINED / f"{family}_CompensatorGains-v0_s{seed}.npz").meta
+        hp = meta["hyperparameters"]
+        opt = _options(hour.stage_args(seed, k, 7.5, start, tmp_path))
+        assert int(opt["seed"][0]) == meta["seed"] == seed
+        assert int(opt["iterations"][0]) == hp["iterations"] and int(opt["replicates"][0]) == hp["replicates"]
+        assert [float(r) for r in opt["ridges"]] == hp["ridges"]
+        assert "parallel" in opt and meta["parallel"] is True and "shared-warmup" in opt and hp["shared_warmup"]
+        assert opt.get("features", [meta["feature_set"]])[0] == meta["feature_set"]
+        assert opt.get("free", ["all"])[0] == hp["free"]
+        assert Path(opt["init"][0]).stem == hp["init"]
+        assert opt["export"][0] == str(tmp_path / f"{family}_CompensatorGains-v0_s{seed}.npz")
+        if k < 3:     # capped stages: their own cap; stage 4: the budget handed in
+            assert hour.STAGES[k][2] == hp["minutes"]
+        else:
+            assert float(opt["minutes"][0]) == 7.5
+        assert not set(opt) - {"seed", "iterations", "minutes", "replicates", "ridges", "parallel", "shared-warmup",
+                               "features", "free", "init", "export"}
+
+
+def test_the_last_stage_gets_what_the_hour_leaves(monkeypatch, tmp_path, capsys):
+    """Stages that 'take' 15 min each leave stage 4 57.5 - start - 45 min; 16 min each leave less than a minute, and
+    stage 4 is not started (exit 1)."""
+    hour = load_script("train_compensator_hour")
+    import agents.gn_compensator as gnc
+    start = TRAINED / "arsp_CompensatorGains-v0_s0.npz"
+    spent = hour.start_minutes(start)
+    assert 9.0 < spent < 9.6              # the committed ARS start: 55 iterations, 9.3 min on both cores
+
+    for per_stage, expect_calls in ((15.0, 4), (16.0, 3)):
+        clock, calls = [0.0], []
+
+        def fake_stage(argv, clock=clock, calls=calls, per_stage=per_stage):
+            calls.append(_options(argv))
+            clock[0] += per_stage * 60.0
+            return 0
+
+        monkeypatch.setattr(gnc, "main", fake_stage)
+        monkeypatch.setattr(hour.time, "monotonic", lambda clock=clock: clock[0])
+        rc = hour.main(["--seed", "3", "--start", str(start), "--out-dir", str(tmp_path)])
+        assert len(calls) == expect_calls and rc == (0 if expect_calls == 4 else 1)
+        assert [float(c["minutes"][0]) for c in calls[:3]] == [90.0, 62.0, 22.0]
+        if expect_calls == 4:
+            assert float(calls[3]["minutes"][0]) == pytest.approx(min(12.0, 57.5 - spent - 45.0), abs=0.006)
+        else:
+            assert "gnwsfo not started" in capsys.readouterr().out
+    assert hour.last_budget(9.3, 20.0) == 12.0 and hour.last_budget(9.3, 40.0) == pytest.approx(8.2)
+
+
+@pytest.mark.parametrize("argv, field", [(["--seed", "-1"], "--seed"), (["--hour", "nan"], "--hour"),
+                                         (["--hour", "5"], "--hour"), (["--start", "missing.npz"], "--start")])
+def test_bad_options_are_refused_by_name(argv, field, capsys):
+    hour = load_script("train_compensator_hour")
+    with pytest.raises(SystemExit) as e:
+        hour.main(argv + ["--dry-run"])
+    assert e.value.code == 2 and field in capsys.readouterr().err
