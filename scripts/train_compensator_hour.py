@@ -66,9 +66,11 @@ def last_budget(start_minutes: float, elapsed_minutes: float, hour: float = HOUR
 
 def start_minutes(start: Path) -> float:
     """The training minutes of the start file's whole ``--init`` chain (scripts/training_cost.py's own costs)."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from training_cost import chain
-    return sum(r[1] for r in chain(start)) / 60.0
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("training_cost", Path(__file__).resolve().parent / "training_cost.py")
+    training_cost = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(training_cost)
+    return sum(r[1] for r in training_cost.chain(start)) / 60.0
 
 
 def main(argv=None) -> int:

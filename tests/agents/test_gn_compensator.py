@@ -663,12 +663,13 @@ def test_the_shared_warmup_chains_carry_their_recipe_and_fit_the_hour(seed):
               ("gnwsfo", "gnwsf", "hsfo", "outward")]
     for family, parent, fs, free in stages:
         pol = arc.load_policy(base / f"{family}_CompensatorGains-v0_s{seed}.npz")
-        init = arc.load_policy(base / (f"{parent}_CompensatorGains-v0_s0.npz" if parent == "arsp" else f"{parent}_CompensatorGains-v0_s{seed}.npz"))
+        parent_stem = f"{parent}_CompensatorGains-v0_s{0 if parent == 'arsp' else seed}"
+        init = arc.load_policy(base / f"{parent_stem}.npz")
         hp = pol.meta["hyperparameters"]
         assert pol.meta["method"] == "gauss-newton" and pol.meta["seed"] == seed and pol.feature_set == fs
         assert (hp["shared_warmup"], hp["warmup_steps"], hp["free"], hp["replicates"], hp["columns"]) == (
             True, 599, free, 2, None)
-        assert hp["init"] == (f"{parent}_CompensatorGains-v0_s0" if parent == "arsp" else f"{parent}_CompensatorGains-v0_s{seed}") and pol.meta["parallel"] is True
+        assert hp["init"] == parent_stem and pol.meta["parallel"] is True
         assert pol.stop_guard == init.stop_guard == 0.9
         if free != "all":
             n_parent = arc.n_features(init.feature_set)
