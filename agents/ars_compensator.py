@@ -837,6 +837,28 @@ def load_policy(path: str | Path) -> ARSCompensatorPolicy:
     return ARSCompensatorPolicy(theta, table, scales, meta, name=Path(path).stem, predictor=predictor)
 
 
+def lift_policy(policy: ARSCompensatorPolicy, feature_set: str) -> ARSCompensatorPolicy:
+    """``policy`` written in the larger feature set ``feature_set``: its weights copied by feature name, the features
+    it lacks at weight 0, so it acts as before (e.g. a fish-gated ``hsf`` iterate in the outward-gated ``hsfo`` set of
+    the stage after it, for :func:`average_policies`). ValueError naming the features ``feature_set`` lacks if it is
+    not a superset of the policy's (or if the policy has a predictor and ``feature_set`` is not predicted alike)."""
+    mine, target = feature_names(policy.feature_set), feature_names(feature_set)
+    lost = [nm for nm in mine if nm not in target]
+    if lost:
+        raise ValueError(f"lift_policy: feature set {feature_set!r} lacks {len(lost)} features of {policy.name}'s "
+                         f"{policy.feature_set!r} (e.g. {', '.join(lost[:3])}); it can only add features")
+    if feature_set == policy.feature_set:
+        return policy
+    if policy.predictor is not None and feature_set not in PREDICTED:
+        raise ValueError(f"lift_policy: {policy.name} has a predictor; feature set {feature_set!r} does not use one")
+    keys = sorted(policy.theta)
+    from .common import weights_by_name
+    theta = weights_by_name(policy.theta, keys, mine, target, (N_ACT,))
+    meta = dict(policy.meta) | {"feature_set": feature_set, "lifted_from": policy.feature_set}
+    return ARSCompensatorPolicy(dict(zip(keys, theta)), policy.base_table, policy.scales, meta, name=policy.name,
+                                predictor=policy.predictor)
+
+
 #: metadata fields a weight average keeps of each member (with its ``init``: what the report says of each member)
 MEMBER_FIELDS = ("algo", "method", "seed", "iterations", "first_iteration", "feature_set")
 

@@ -182,7 +182,7 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     batch_j = arc._Batch(venv_j, table, scales, fs, predictor)
     batch_l = arc._Batch(venv_l, table, scales, fs, predictor)
     batch_w = arc._Batch(venv_w, table, scales, fs, predictor) if warm else None
-    curve = []
+    curve, iterates = [], []
     log(f"[gn_comp] seed {seed}: feature set {fs}, {C} sea states, {NA} x {NF} weights each ({len(moved_idx)} moved: {free})"
         + (f"; {NW} random Jacobian columns of them per iteration" if NW < len(moved_idx) else "")
         + f"; per iteration {n_ep} episodes x ({NW} + 1) "
@@ -243,6 +243,7 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
             picks.append({"sea_state": keys[c], "cost_current": float(cc[0]), "cost_after": float(cc[j]),
                           "ridge": ridges[j - 1] if j else None,
                           "step_norm": float(np.linalg.norm(steps[j - 1, c])) if j else 0.0})
+        iterates.append(theta.copy())           # Θ after this iteration's step (:func:`iterate_policies`)
         ratio_h = float(np.nanmean(sh[1]) / np.nanmean(sh[0]))
         ratio_p = float(np.nanmean(sp[1]) / np.nanmean(sp[0]))
         last = time.perf_counter() - t0
@@ -280,11 +281,33 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
             "train_seeds": f"1000*code + j + 10*replicate + {SEED_OFFSET} + 200*iteration (+100 line search) "
                            f"+ 100000*{int(seed)}",
             "curve": curve}
-    out = {k: theta[c] for c, k in enumerate(keys)}
-    if init is not None:                        # sea states not trained on (``entries``) keep the initial weights
-        rest = sorted(set(init.theta) - set(keys))
-        out |= {k: row for k, row in zip(rest, initial_theta(init, rest, fs))}
-    return arc.ARSCompensatorPolicy(out, table, scales, meta, name=f"gn_comp_s{seed}", predictor=predictor)
+    rest = sorted(set(init.theta) - set(keys)) if init is not None else []
+    kept = dict(zip(rest, initial_theta(init, rest, fs))) if rest else {}    # sea states not trained on (``entries``)
+
+    def weights(th):
+        return {k: th[c] for c, k in enumerate(keys)} | kept
+
+    pol = arc.ARSCompensatorPolicy(weights(theta), table, scales, meta, name=f"gn_comp_s{seed}", predictor=predictor)
+    pol.iterates = [weights(th) for th in iterates]     # Θ after each iteration, for :func:`iterate_policies`
+    return pol
+
+
+def iterate_policies(policy: arc.ARSCompensatorPolicy, stem: str) -> list:
+    """The policies of each iteration of a :func:`train` run: Θ after its k-th step (k = 1 … iterations), named
+    ``<stem>_it<NN>`` by its Gauss–Newton iteration number, with the run's metadata cut to those k iterations
+    (``iterations``, ``curve``; ``iterate_of`` names the run). The last one's weights equal ``policy``'s."""
+    its = getattr(policy, "iterates", None)
+    if its is None:
+        raise ValueError(f"{policy.name}: no iterates (a policy returned by gn_compensator.train has them)")
+    first = int(policy.meta["first_iteration"])
+    out = []
+    for k, th in enumerate(its, start=1):
+        meta = dict(policy.meta) | {"iterations": k, "curve": policy.meta["curve"][:k], "iterate_of": stem}
+        meta["num_timesteps"] = policy.meta["num_timesteps"] // len(its) * k
+        meta["wall_seconds"] = float(sum(c["seconds"] for c in meta["curve"]))
+        out.append(arc.ARSCompensatorPolicy(th, policy.base_table, policy.scales, meta,
+                                            name=f"{stem}_it{first + k - 1:02d}", predictor=policy.predictor))
+    return out
 
 
 def jacobian_steps(series, NW: int, discard: float, eps: float, margin_start: float, pitch_weight: float,
@@ -366,6 +389,9 @@ def main(argv=None) -> int:
                          "weights, and branch it into the perturbed copies (about a third less Jacobian work)")
     add_parallel_flag(ap)
     ap.add_argument("--export", default=None, help="policy file (default runs/gn_CompensatorGains-v0_s<seed>.npz)")
+    ap.add_argument("--save-iterates", action="store_true",
+                    help="also write the policy after each iteration's step, beside --export as <stem>_it<NN>.npz "
+                         "(NN the Gauss-Newton iteration number; the last equals --export)")
     a = ap.parse_args(argv)
     if not 1 <= a.iterations <= MAX_ITERATIONS:
         ap.error(f"--iterations must be in 1..{MAX_ITERATIONS} (got {a.iterations})")
@@ -400,5 +426,9 @@ def main(argv=None) -> int:
     except ValueError as e:
         ap.error(str(e))
     arc.save_policy(pol, out)
+    if a.save_iterates:
+        for p in iterate_policies(pol, out.stem):
+            arc.save_policy(p, out.with_name(p.name + ".npz"))
+        print(f"[gn_comp] wrote {len(pol.iterates)} iterates {out.with_name(out.stem + '_itNN.npz')}")
     print(f"[gn_comp] wrote {out} ({pol.meta['iterations']} iterations, {pol.meta['wall_seconds'] / 60:.1f} min)")
     return 0

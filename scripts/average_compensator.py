@@ -1,5 +1,7 @@
 """The mean of the weights of CompensatorGains policies of one class (agents.ars_compensator.average_policies), e.g.
-two Gauss-Newton chains from one ARS start with disjoint training seeds (docs/agents.md "Averaging two chains"):
+two Gauss-Newton chains from one ARS start with disjoint training seeds (docs/agents.md "Averaging two chains"), or
+the iterates of one chain (``scripts/train_gn_compensator.py --save-iterates``; ``--features hsfo`` writes an earlier
+stage's iterates in the last stage's feature set first):
 
     python scripts/average_compensator.py --seed 0 --export runs/chain/gnsm_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s0.npz runs/chain/gnsp_CompensatorGains-v0_s1.npz
 
@@ -19,6 +21,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("policies", nargs="+", help="CompensatorGains ARS / Gauss-Newton policy files (.npz), at least 2")
     ap.add_argument("--seed", type=int, required=True, help="the label of the average (its members keep their own)")
+    ap.add_argument("--features", default=None, choices=arc.FEATURE_SETS,
+                    help="write every member in this feature set first (agents.ars_compensator.lift_policy: the "
+                         "features a member lacks at weight 0), e.g. hsfo to average the iterates of a chain's hsf "
+                         "and hsfo stages; it must contain every member's features")
     ap.add_argument("--export", default=None,
                     help="output .npz, written atomically (default runs/average_CompensatorGains-v0_s<seed>.npz under "
                          "the current folder)")
@@ -39,6 +45,8 @@ def main(argv=None) -> int:
         except (OSError, ValueError) as exc:
             ap.error(f"{p}: {exc}")
     try:
+        if a.features:
+            members = [arc.lift_policy(m, a.features) for m in members]
         avg = arc.average_policies(members, a.seed)
     except ValueError as exc:
         ap.error(str(exc))

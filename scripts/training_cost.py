@@ -51,20 +51,23 @@ def chain(path, _inside=frozenset(), search=()) -> list[tuple[str, float, int]]:
     """[(file stem, own wall seconds, own env steps)] from the first run of the chain to ``path`` (each link looked
     up next to the file that names it, then in the ``search`` folders). A weight average (``meta["averaged_from"]``,
     scripts/average_compensator.py) costs its members' chains, looked up the same way, a run they share (their common
-    start) counted once, then itself (no iterations of its own)."""
+    start) counted once, then itself (no iterations of its own). Members that are iterates of one run
+    (``meta["iterate_of"]``, ``train_gn_compensator.py --save-iterates``) are parts of that run: it counts once,
+    with its latest member's iterations."""
     path = Path(path)
     members = read_meta(path).get("averaged_from")
     if members:
         if path.stem in _inside or path.stem in {Path(m).stem for m in members}:
             raise ValueError(f"{path}: the weight average lists itself among its members (directly or through one)")
-        out, seen = [], set()
+        runs = {}                           # run -> its longest part among the members (dicts keep first-seen order)
         for m in members:
             nxt = _find(path, m, search, "member")
-            for run in chain(nxt, _inside | {path.stem}, search):
-                if run[0] not in seen:
-                    seen.add(run[0])
-                    out.append(run)
-        return out + [(path.stem, *own_cost(read_meta(path)))]
+            mine = chain(nxt, _inside | {path.stem}, search)
+            run_of_member = read_meta(nxt).get("iterate_of") or mine[-1][0]
+            for key, run in [(r[0], r) for r in mine[:-1]] + [(run_of_member, mine[-1])]:
+                if key not in runs or run[1] > runs[key][1]:
+                    runs[key] = run
+        return list(runs.values()) + [(path.stem, *own_cost(read_meta(path)))]
     out, seen = [], set()
     while True:
         if path.stem in seen:
