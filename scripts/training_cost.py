@@ -53,7 +53,8 @@ def chain(path, _inside=frozenset(), search=()) -> list[tuple[str, float, int]]:
     scripts/average_compensator.py) costs its members' chains, looked up the same way, a run they share (their common
     start) counted once, then itself (no iterations of its own). Members that are iterates of one run
     (``meta["iterate_of"]``, ``train_gn_compensator.py --save-iterates``) are parts of that run: it counts once,
-    with its latest member's iterations."""
+    as its longest part (most env steps; the run's own file when a chain holds it and the last iterate is as long -
+    an iterate file re-run from the same start carries its own re-run's wall)."""
     path = Path(path)
     members = read_meta(path).get("averaged_from")
     if members:
@@ -65,7 +66,9 @@ def chain(path, _inside=frozenset(), search=()) -> list[tuple[str, float, int]]:
             mine = chain(nxt, _inside | {path.stem}, search)
             run_of_member = read_meta(nxt).get("iterate_of") or mine[-1][0]
             for key, run in [(r[0], r) for r in mine[:-1]] + [(run_of_member, mine[-1])]:
-                if key not in runs or run[1] > runs[key][1]:
+                held = runs.get(key)
+                if (held is None or run[2] > held[2]                 # more env steps: a longer part of the run
+                        or (run[2] == held[2] and run[0] == key != held[0])):   # the whole run: its own file
                     runs[key] = run
         return list(runs.values()) + [(path.stem, *own_cost(read_meta(path)))]
     out, seen = [], set()

@@ -110,3 +110,28 @@ def test_cli_averages_a_chains_stages_in_the_larger_feature_set(tmp_path, capsys
     with pytest.raises(SystemExit):
         script.main(["--seed", "1", "--features", "hsf", "--export", str(tmp_path / "n.npz")] + files)
     assert "lacks" in capsys.readouterr().err
+
+
+def test_the_runs_own_file_stands_for_it_when_as_long_as_its_last_iterate(iterates):
+    """A member continuing the run (its --init) brings the run's own file into the chain; the last iterate is as
+    long, and the run's own file is the one counted (an iterate re-run from the same start carries its re-run's
+    wall), whatever the members' order."""
+    d, two, _one, files = iterates
+    cont = arc.load_policy(d / "gnx_CompensatorGains-v0_s3.npz")
+    meta = dict(cont.meta) | {"hyperparameters": dict(cont.meta["hyperparameters"]) | {"init": cont.name},
+                              "curve": cont.meta["curve"][:1], "num_timesteps": 5}
+    arc.save_policy(arc.ARSCompensatorPolicy(cont.theta, cont.base_table, cont.scales, meta, name="gny"),
+                    d / "gny_CompensatorGains-v0_s3.npz")
+    # the iterate's wall differs from the run's (as a re-run's would)
+    kept = files[1].read_bytes()
+    it = arc.load_policy(files[1])
+    it.meta["curve"] = [dict(c) | {"seconds": c["seconds"] + 100.0} for c in it.meta["curve"]]
+    arc.save_policy(it, files[1])
+    cost = load_script("training_cost")
+    for order in (1, -1):
+        members = [arc.load_policy(files[1]), arc.load_policy(d / "gny_CompensatorGains-v0_s3.npz")][::order]
+        avg = arc.average_policies(members, seed=3)
+        out = arc.save_policy(avg, d / f"gnya{order + 1}_CompensatorGains-v0_s3.npz")
+        names = [r[0] for r in cost.chain(out)]
+        assert "gnx_CompensatorGains-v0_s3" in names and files[1].stem not in names
+    files[1].write_bytes(kept)                  # the module's other tests read the iterate as trained
