@@ -2,17 +2,20 @@
 hour"): from the committed ARS start, the headline ``gnsfo``'s four Gauss–Newton stages, each with the shared warm-up
 of the Jacobian episodes, one after another on both cores; the last stage's budget is what is left of the hour:
 
-    python scripts/train_compensator_hour.py --seed 2     # -> runs/gnw/gnw{,s,sf,sfo}_CompensatorGains-v0_s2.npz
+    python scripts/train_compensator_hour.py --seed 2     # -> runs/gnw/gnw{,s,sf,sfo,t}_CompensatorGains-v0_s2.npz
 
     stage 1  gnw     all weights of feature set h     6 iterations (cap 90 min)
     stage 2  gnws    + the skyhook-gated copy (hs)    4 iterations (cap 62 min)
     stage 3  gnwsf   + the fish-gated copy (hsf)      8 iterations (cap 22 min)
     stage 4  gnwsfo  + the outward-gated copy (hsfo)  8 iterations, budget min(12, HOUR - start - elapsed) min
+    then     gnwt    the mean of the last ceil(n/2) of stages 3-4's n iterates (Θ after each step; in hsfo)
 
 HOUR is 57.5 min, start the ARS start's own training time (9.3 min for ``arsp`` seed 0, read from its file; the declared chains used 9.4) and
 elapsed the wall of stages 1-3. Run it alone on the machine: the committed seeds took 57.0-57.4 min of wall with the
-ARS start (``python scripts/training_cost.py agents/trained/gnwsfo_CompensatorGains-v0_s0.npz``). ``--dry-run``
-prints the stages' commands (``scripts/train_gn_compensator.py``) without running them. One BLAS thread unless
+ARS start (``python scripts/training_cost.py agents/trained/gnwsfo_CompensatorGains-v0_s0.npz``); the average adds
+about a second and is the chain's product (``gnwt``; docs/agents.md "A steadier end": on the evaluation set it beat
+the last iterate, 17.8 against 16.5 % seed mean). ``--dry-run`` prints the stages' commands
+(``scripts/train_gn_compensator.py``, ``scripts/average_compensator.py``) without running them. One BLAS thread unless
 OPENBLAS_NUM_THREADS or OMP_NUM_THREADS is set, as the committed files were trained.
 """
 import os
@@ -33,6 +36,8 @@ HOUR_MINUTES = 57.5      # the chain's wall including the ARS start's training, 
 LAST_STAGE_CAP = 12.0    # minutes: stage 4's budget never exceeds this
 MIN_LAST_STAGE = 1.0     # minutes: below this the hour is spent and stage 4 is not started
 COMMON = ["--replicates", "2", "--ridges", "0.01", "0.1", "1", "10", "100", "--parallel", "--shared-warmup"]
+AVERAGED_STAGES = (2, 3)  # the stages (0-based) whose iterates the tail average takes: fish-gated and outward
+AVERAGE_FAMILY = "gnwt"
 # (family, iterations, minutes cap or None for the hour's remainder, feature set or None, moved weights or None)
 STAGES = (("gnw", 6, 90.0, None, None),
           ("gnws", 4, 62.0, "hs", "gated"),
@@ -56,7 +61,44 @@ def stage_args(seed: int, stage: int, minutes: float, start: Path, out_dir: Path
     args = ["--seed", str(seed), "--iterations", str(iterations), "--minutes", f"{minutes:g}"] + COMMON
     if features:
         args += ["--features", features, "--free", free]
+    if stage in AVERAGED_STAGES:
+        args += ["--save-iterates"]
     return args + ["--init", str(init), "--export", str(out_dir / f"{family}_CompensatorGains-v0_s{seed}.npz")]
+
+
+def tail_count(n: int) -> int:
+    """How many of the last iterates the average takes: ceil(n / 2) of ``n``."""
+    return math.ceil(n / 2)
+
+
+def iterate_files(seed: int, out_dir: Path) -> list[Path]:
+    """The iterate files of the averaged stages in step order, named from each stage file's own iteration count
+    (so files left by an earlier run in ``out_dir`` are not taken)."""
+    from agents import ars_compensator as arc
+    files = []
+    for k in AVERAGED_STAGES:
+        stem = f"{STAGES[k][0]}_CompensatorGains-v0_s{seed}"
+        meta = arc.load_policy(out_dir / f"{stem}.npz").meta
+        first, n = int(meta["first_iteration"]), int(meta["iterations"])
+        files += [out_dir / f"{stem}_it{i:02d}.npz" for i in range(first, first + n)]
+    return files
+
+
+def average_args(seed: int, out_dir: Path) -> list[str]:
+    """``scripts/average_compensator.py``'s arguments for the chain's tail average (in stage 4's feature set)."""
+    files = iterate_files(seed, out_dir)
+    return (["--seed", str(seed), "--features", STAGES[-1][3],
+             "--export", str(out_dir / f"{AVERAGE_FAMILY}_CompensatorGains-v0_s{seed}.npz")]
+            + [str(f) for f in files[-tail_count(len(files)):]])
+
+
+def _script(name: str):
+    """A module of this folder (scripts/ is no package)."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).resolve().parent / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def last_budget(start_minutes: float, elapsed_minutes: float, hour: float = HOUR_MINUTES) -> float:
@@ -66,11 +108,7 @@ def last_budget(start_minutes: float, elapsed_minutes: float, hour: float = HOUR
 
 def start_minutes(start: Path) -> float:
     """The training minutes of the start file's whole ``--init`` chain (scripts/training_cost.py's own costs)."""
-    import importlib.util
-    spec = importlib.util.spec_from_file_location("training_cost", Path(__file__).resolve().parent / "training_cost.py")
-    training_cost = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(training_cost)
-    return sum(r[1] for r in training_cost.chain(start)) / 60.0
+    return sum(r[1] for r in _script("training_cost").chain(start)) / 60.0
 
 
 def main(argv=None) -> int:
@@ -108,6 +146,10 @@ def main(argv=None) -> int:
         for k in range(len(STAGES)):
             args = stage_args(a.seed, k, minutes_of(k, 0.0), a.start, a.out_dir)
             print(shlex.join([sys.executable, "scripts/train_gn_compensator.py"] + args))
+        print(shlex.join([sys.executable, "scripts/average_compensator.py", "--seed", str(a.seed), "--features",
+                          STAGES[-1][3], "--export",
+                          str(a.out_dir / f"{AVERAGE_FAMILY}_CompensatorGains-v0_s{a.seed}.npz")])
+              + " <the last ceil(n/2) of the n iterate files of stages 3-4>")
         return 0
     from agents.gn_compensator import main as train_stage
     t0 = time.monotonic()
@@ -124,9 +166,12 @@ def main(argv=None) -> int:
         rc = train_stage(stage_args(a.seed, k, minutes, a.start, a.out_dir))
         if rc:
             return rc
+    rc = _script("average_compensator").main(average_args(a.seed, a.out_dir))
+    if rc:
+        return rc
     total = (time.monotonic() - t0) / 60.0
     print(f"[hour] done: {total:.1f} min of stages + {spent:.1f} min of start = {total + spent:.1f} min "
-          f"(python scripts/training_cost.py {a.out_dir / f'{STAGES[-1][0]}_CompensatorGains-v0_s{a.seed}.npz'})")
+          f"(python scripts/training_cost.py {a.out_dir / f'{AVERAGE_FAMILY}_CompensatorGains-v0_s{a.seed}.npz'})")
     return 0
 
 
