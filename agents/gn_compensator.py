@@ -292,6 +292,11 @@ def train(seed: int = 0, iterations: int = 5, minutes: float = 55.0, replicates:
     return pol
 
 
+def iterate_stem(stem: str, iteration: int) -> str:
+    """The name of a run's policy after Gauss–Newton iteration ``iteration``: ``<stem>_it<NN>``."""
+    return f"{stem}_it{int(iteration):02d}"
+
+
 def iterate_policies(policy: arc.ARSCompensatorPolicy, stem: str) -> list:
     """The policies of each iteration of a :func:`train` run: Θ after its k-th step (k = 1 … iterations), named
     ``<stem>_it<NN>`` by its Gauss–Newton iteration number, with the run's metadata cut to those k iterations
@@ -306,7 +311,7 @@ def iterate_policies(policy: arc.ARSCompensatorPolicy, stem: str) -> list:
         meta["num_timesteps"] = policy.meta["num_timesteps"] // len(its) * k
         meta["wall_seconds"] = float(sum(c["seconds"] for c in meta["curve"]))
         out.append(arc.ARSCompensatorPolicy(th, policy.base_table, policy.scales, meta,
-                                            name=f"{stem}_it{first + k - 1:02d}", predictor=policy.predictor))
+                                            name=iterate_stem(stem, first + k - 1), predictor=policy.predictor))
     return out
 
 

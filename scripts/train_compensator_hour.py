@@ -46,6 +46,11 @@ STAGES = (("gnw", 6, 90.0, None, None),
 DEFAULT_START = Path("agents/trained/arsp_CompensatorGains-v0_s0.npz")
 
 
+def policy_file(out_dir: Path, family: str, seed: int) -> Path:
+    """The policy file of ``family`` and ``seed`` in ``out_dir`` (the committed files' naming)."""
+    return out_dir / f"{family}_CompensatorGains-v0_s{seed}.npz"
+
+
 def default_start() -> Path:
     """The committed ARS start: ``agents/trained/…`` of the working directory (a clone), else the installed package's."""
     if DEFAULT_START.exists():
@@ -57,13 +62,13 @@ def default_start() -> Path:
 def stage_args(seed: int, stage: int, minutes: float, start: Path, out_dir: Path) -> list[str]:
     """The ``train_gn_compensator.py`` arguments of stage ``stage`` (0-based) of seed ``seed``."""
     family, iterations, _, features, free = STAGES[stage]
-    init = start if stage == 0 else out_dir / f"{STAGES[stage - 1][0]}_CompensatorGains-v0_s{seed}.npz"
+    init = start if stage == 0 else policy_file(out_dir, STAGES[stage - 1][0], seed)
     args = ["--seed", str(seed), "--iterations", str(iterations), "--minutes", f"{minutes:g}"] + COMMON
     if features:
         args += ["--features", features, "--free", free]
     if stage in AVERAGED_STAGES:
         args += ["--save-iterates"]
-    return args + ["--init", str(init), "--export", str(out_dir / f"{family}_CompensatorGains-v0_s{seed}.npz")]
+    return args + ["--init", str(init), "--export", str(policy_file(out_dir, family, seed))]
 
 
 def tail_count(n: int) -> int:
@@ -75,12 +80,13 @@ def iterate_files(seed: int, out_dir: Path) -> list[Path]:
     """The iterate files of the averaged stages in step order, named from each stage file's own iteration count
     (so files left by an earlier run in ``out_dir`` are not taken)."""
     from agents import ars_compensator as arc
+    from agents.gn_compensator import iterate_stem
     files = []
     for k in AVERAGED_STAGES:
-        stem = f"{STAGES[k][0]}_CompensatorGains-v0_s{seed}"
-        meta = arc.load_policy(out_dir / f"{stem}.npz").meta
+        stage = policy_file(out_dir, STAGES[k][0], seed)
+        meta = arc.load_policy(stage).meta
         first, n = int(meta["first_iteration"]), int(meta["iterations"])
-        files += [out_dir / f"{stem}_it{i:02d}.npz" for i in range(first, first + n)]
+        files += [stage.with_name(iterate_stem(stage.stem, i) + ".npz") for i in range(first, first + n)]
     return files
 
 
@@ -88,7 +94,7 @@ def average_args(seed: int, out_dir: Path) -> list[str]:
     """``scripts/average_compensator.py``'s arguments for the chain's tail average (in stage 4's feature set)."""
     files = iterate_files(seed, out_dir)
     return (["--seed", str(seed), "--features", STAGES[-1][3],
-             "--export", str(out_dir / f"{AVERAGE_FAMILY}_CompensatorGains-v0_s{seed}.npz")]
+             "--export", str(policy_file(out_dir, AVERAGE_FAMILY, seed))]
             + [str(f) for f in files[-tail_count(len(files)):]])
 
 
@@ -148,7 +154,7 @@ def main(argv=None) -> int:
             print(shlex.join([sys.executable, "scripts/train_gn_compensator.py"] + args))
         print(shlex.join([sys.executable, "scripts/average_compensator.py", "--seed", str(a.seed), "--features",
                           STAGES[-1][3], "--export",
-                          str(a.out_dir / f"{AVERAGE_FAMILY}_CompensatorGains-v0_s{a.seed}.npz")])
+                          str(policy_file(a.out_dir, AVERAGE_FAMILY, a.seed))])
               + " <the last ceil(n/2) of the n iterate files of stages 3-4>")
         return 0
     from agents.gn_compensator import main as train_stage
@@ -171,7 +177,7 @@ def main(argv=None) -> int:
         return rc
     total = (time.monotonic() - t0) / 60.0
     print(f"[hour] done: {total:.1f} min of stages + {spent:.1f} min of start = {total + spent:.1f} min "
-          f"(python scripts/training_cost.py {a.out_dir / f'{AVERAGE_FAMILY}_CompensatorGains-v0_s{a.seed}.npz'})")
+          f"(python scripts/training_cost.py {policy_file(a.out_dir, AVERAGE_FAMILY, a.seed)})")
     return 0
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from agents import ars_compensator as arc
@@ -118,7 +119,6 @@ def test_committed_tail_averages_are_the_chains_last_half(seed):
             for f in ("gnwsf", "gnwsfo"))
     assert len(members) == hour.tail_count(n) and avg.meta["averaged_from"] == [m.name for m in members]
     lifted = [arc.lift_policy(m, "hsfo") for m in members]
-    import numpy as np
     for k in avg.theta:
         np.testing.assert_array_equal(avg.theta[k], np.mean([m.theta[k] for m in lifted], axis=0))
     for family in ("gnwsf", "gnwsfo"):
