@@ -130,3 +130,32 @@ def test_committed_tail_averages_are_the_chains_last_half(seed):
     assert [r[0] for r in runs[:4]] == ["arsp_CompensatorGains-v0_s0"] + [f"{f}_CompensatorGains-v0_s{seed}"
                                                                           for f in ("gnw", "gnws", "gnwsf")]
     assert runs[-2][0].startswith(f"gnwsfo_CompensatorGains-v0_s{seed}_it") and len(runs) == 6
+
+
+@pytest.mark.parametrize("seed, outward", [(0, 7), (1, 6), (2, 5)])
+def test_committed_gnw5t_is_the_mean_of_its_chains_last_half(seed, outward):
+    """``gnw5t`` seed k (docs/agents.md "Fewer fish-gated steps, more outward ones"): the committed chain's fish-gated
+    stage cut at 5 steps (its iterate 14, as a 5-step stage), then ``outward`` outward-gated steps from it; the policy
+    is the mean of the last ceil(n/2) of those n = 5 + outward iterates (all outward-gated here), the last of them
+    the outward stage's file, and scripts/training_cost.py follows the chain back to the ARS start."""
+    hour = load_script("train_compensator_hour")
+    cut = arc.load_policy(TRAINED / f"gnwsf_CompensatorGains-v0_s{seed}_it14.npz")
+    assert cut.meta["iterations"] == 5 and cut.meta["first_iteration"] == 10
+    assert cut.meta["iterate_of"] == f"gnwsf_CompensatorGains-v0_s{seed}"
+    stage = arc.load_policy(TRAINED / f"gnw5sfo_CompensatorGains-v0_s{seed}.npz")
+    hp = stage.meta["hyperparameters"]
+    assert stage.meta["iterations"] == outward and stage.meta["first_iteration"] == 15
+    assert hp["init"] == cut.name and hp["free"] == "outward" and stage.meta["feature_set"] == "hsfo"
+    n = hour.tail_count(5 + outward)
+    members = [arc.load_policy(TRAINED / f"gnw5sfo_CompensatorGains-v0_s{seed}_it{i}.npz")
+               for i in range(15 + outward - n, 15 + outward)]
+    avg = arc.load_policy(TRAINED / f"gnw5t_CompensatorGains-v0_s{seed}.npz")
+    assert avg.meta["averaged_from"] == [m.name for m in members]
+    for k in avg.theta:
+        np.testing.assert_array_equal(avg.theta[k], np.mean([m.theta[k] for m in members], axis=0))
+        np.testing.assert_array_equal(members[-1].theta[k], stage.theta[k])
+    runs = load_script("training_cost").chain(TRAINED / f"gnw5t_CompensatorGains-v0_s{seed}.npz")
+    assert [r[0] for r in runs] == (["arsp_CompensatorGains-v0_s0"]
+                                    + [f"{f}_CompensatorGains-v0_s{seed}" for f in ("gnw", "gnws")]
+                                    + [cut.name, members[-1].name, avg.name])
+    assert sum(r[1] for r in runs) / 60.0 < 57.5          # the iterations' minutes; the chain's wall is documented
