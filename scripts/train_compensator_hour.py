@@ -8,7 +8,8 @@ of the Jacobian episodes, one after another on both cores; the last stage's budg
     stage 2  gnws    + the skyhook-gated copy (hs)    4 iterations (cap 62 min)
     stage 3  gnwsf   + the fish-gated copy (hsf)      8 iterations (cap 22 min)
     stage 4  gnwsfo  + the outward-gated copy (hsfo)  8 iterations, budget min(12, HOUR - start - elapsed) min
-    then     gnwt    the mean of the last ceil(n/2) of stages 3-4's n iterates (Θ after each step; in hsfo)
+    then     gnwt    the mean of the last ceil(n/2) of stages 3-4's n iterates (Θ after each step; in hsfo;
+                     stage 3's alone if the hour left stage 4 less than a minute, on a slow host)
 
 HOUR is 57.5 min, start the ARS start's own training time (9.3 min for ``arsp`` seed 0, read from its file; the declared chains used 9.4) and
 elapsed the wall of stages 1-3. Run it alone on the machine: the committed seeds took 57.0-57.4 min of wall with the
@@ -76,13 +77,13 @@ def tail_count(n: int) -> int:
     return math.ceil(n / 2)
 
 
-def iterate_files(seed: int, out_dir: Path) -> list[Path]:
-    """The iterate files of the averaged stages in step order, named from each stage file's own iteration count
+def iterate_files(seed: int, out_dir: Path, stages=AVERAGED_STAGES) -> list[Path]:
+    """The iterate files of the averaged ``stages`` in step order, named from each stage file's own iteration count
     (so files left by an earlier run in ``out_dir`` are not taken)."""
     from agents import ars_compensator as arc
     from agents.gn_compensator import iterate_stem
     files = []
-    for k in AVERAGED_STAGES:
+    for k in stages:
         stage = policy_file(out_dir, STAGES[k][0], seed)
         meta = arc.load_policy(stage).meta
         first, n = int(meta["first_iteration"]), int(meta["iterations"])
@@ -90,9 +91,10 @@ def iterate_files(seed: int, out_dir: Path) -> list[Path]:
     return files
 
 
-def average_args(seed: int, out_dir: Path) -> list[str]:
-    """``scripts/average_compensator.py``'s arguments for the chain's tail average (in stage 4's feature set)."""
-    files = iterate_files(seed, out_dir)
+def average_args(seed: int, out_dir: Path, stages=AVERAGED_STAGES) -> list[str]:
+    """``scripts/average_compensator.py``'s arguments for the chain's tail average (in stage 4's feature set) over the
+    iterates of ``stages`` (stage 3 alone when the hour left no time for stage 4)."""
+    files = iterate_files(seed, out_dir, stages)
     return (["--seed", str(seed), "--features", STAGES[-1][3],
              "--export", str(policy_file(out_dir, AVERAGE_FAMILY, seed))]
             + [str(f) for f in files[-tail_count(len(files)):]])
@@ -160,19 +162,21 @@ def main(argv=None) -> int:
     from agents.gn_compensator import main as train_stage
     t0 = time.monotonic()
     print(f"[hour] seed {a.seed}: the start {a.start} took {spent:.1f} min; the chain has {a.hour:g} min", flush=True)
+    averaged = AVERAGED_STAGES
     for k, (family, *_rest) in enumerate(STAGES):
         elapsed = (time.monotonic() - t0) / 60.0
         minutes = minutes_of(k, elapsed)
         if minutes < MIN_LAST_STAGE:
+            averaged = tuple(j for j in AVERAGED_STAGES if j < k)
             print(f"[hour] the hour is spent after {elapsed:.1f} min of stages (budget {minutes:.2f} min left): "
-                  f"{family} not started; the chain ends at {STAGES[k - 1][0]}", flush=True)
-            return 1
+                  f"{family} not started; the tail average takes {STAGES[k - 1][0]}'s iterates alone", flush=True)
+            break
         print(f"[hour] stage {k + 1}/{len(STAGES)} {family}: {minutes:g} min cap, {elapsed:.1f} min elapsed",
               flush=True)
         rc = train_stage(stage_args(a.seed, k, minutes, a.start, a.out_dir))
         if rc:
             return rc
-    rc = _script("average_compensator").main(average_args(a.seed, a.out_dir))
+    rc = _script("average_compensator").main(average_args(a.seed, a.out_dir, averaged))
     if rc:
         return rc
     total = (time.monotonic() - t0) / 60.0

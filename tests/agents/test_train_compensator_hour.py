@@ -1,7 +1,7 @@
 """scripts/train_compensator_hour.py, the CompensatorGains one-hour recipe in one command (issue 14; docs/agents.md
 "The headline's stages within the hour"): its four stages are the committed ``gnw…`` files' recipes, stage 4 gets
 what the hour leaves (at most 12 min) and is not started when the hour is spent, the chain ends with the mean of
-the last half of stages 3-4's iterates, bad options are refused by name."""
+the last half of stages 3-4's iterates (stage 3's alone without stage 4), bad options are refused by name."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -79,7 +79,7 @@ def test_the_last_stage_gets_what_the_hour_leaves(monkeypatch, tmp_path, capsys)
         monkeypatch.setattr(gnc, "main", fake_stage)
         monkeypatch.setattr(hour.time, "monotonic", lambda clock=clock: clock[0])
         rc = hour.main(["--seed", "0", "--start", str(start), "--out-dir", str(tmp_path)])
-        assert len(calls) == expect_calls and rc == (0 if expect_calls == 4 else 1)
+        assert len(calls) == expect_calls and rc == 0
         assert [float(c["minutes"][0]) for c in calls[:3]] == [90.0, 62.0, 22.0]
         if expect_calls == 4:
             assert float(calls[3]["minutes"][0]) == pytest.approx(min(12.0, 57.5 - spent - 45.0), abs=0.006)
@@ -89,8 +89,10 @@ def test_the_last_stage_gets_what_the_hour_leaves(monkeypatch, tmp_path, capsys)
             assert averaged[-1][6:] == ([str(tmp_path / f"gnwsf_CompensatorGains-v0_s0_it{i}.npz") for i in (16, 17)]
                                         + [str(tmp_path / f"gnwsfo_CompensatorGains-v0_s0_it{i}.npz")
                                            for i in range(18, 23)])
-        else:
-            assert "gnwsfo not started" in capsys.readouterr().out and len(averaged) == 1   # no average
+        else:       # stage 4 not started: the chain still ends with the tail mean, of stage 3's iterates alone
+            assert "gnwsfo not started" in capsys.readouterr().out and len(averaged) == 2
+            assert averaged[-1][6:] == [str(tmp_path / f"gnwsf_CompensatorGains-v0_s0_it{i}.npz")
+                                        for i in (14, 15, 16, 17)]
     assert hour.last_budget(9.3, 20.0) == 12.0 and hour.last_budget(9.3, 40.0) == pytest.approx(8.2)
     assert [hour.tail_count(n) for n in (9, 10, 11, 13)] == [5, 5, 6, 7]
 
