@@ -95,9 +95,14 @@ def average_args(seed: int, out_dir: Path, stages=AVERAGED_STAGES) -> list[str]:
     """``scripts/average_compensator.py``'s arguments for the chain's tail average (in stage 4's feature set) over the
     iterates of ``stages`` (stage 3 alone when the hour left no time for stage 4)."""
     files = iterate_files(seed, out_dir, stages)
-    return (["--seed", str(seed), "--features", STAGES[-1][3],
-             "--export", str(policy_file(out_dir, AVERAGE_FAMILY, seed))]
-            + [str(f) for f in files[-tail_count(len(files)):]])
+    return _average_options(seed, out_dir) + [str(f) for f in files[-tail_count(len(files)):]]
+
+
+def _average_options(seed: int, out_dir: Path) -> list[str]:
+    """The tail average's options before its member files (``--dry-run`` prints them without the members, which the
+    stage files name only once they exist)."""
+    return ["--seed", str(seed), "--features", STAGES[-1][3],
+            "--export", str(policy_file(out_dir, AVERAGE_FAMILY, seed))]
 
 
 def _script(name: str):
@@ -154,9 +159,7 @@ def main(argv=None) -> int:
         for k in range(len(STAGES)):
             args = stage_args(a.seed, k, minutes_of(k, 0.0), a.start, a.out_dir)
             print(shlex.join([sys.executable, "scripts/train_gn_compensator.py"] + args))
-        print(shlex.join([sys.executable, "scripts/average_compensator.py", "--seed", str(a.seed), "--features",
-                          STAGES[-1][3], "--export",
-                          str(policy_file(a.out_dir, AVERAGE_FAMILY, a.seed))])
+        print(shlex.join([sys.executable, "scripts/average_compensator.py"] + _average_options(a.seed, a.out_dir))
               + " <the last ceil(n/2) of the n iterate files of stages 3-4>")
         return 0
     from agents.gn_compensator import main as train_stage

@@ -161,3 +161,12 @@ def test_committed_gnw5t_is_the_mean_of_its_chains_last_half(seed, outward):
                                     + [f"{f}_CompensatorGains-v0_s{seed}" for f in ("gnw", "gnws")]
                                     + [cut.name, members[-1].name, avg.name])
     assert sum(r[1] for r in runs) / 60.0 < 57.5          # the iterations' minutes; the chain's wall is documented
+
+
+def test_dry_run_prints_the_four_stages_and_the_average(capsys, tmp_path):
+    hour = load_script("train_compensator_hour")
+    assert hour.main(["--seed", "1", "--out-dir", str(tmp_path), "--dry-run"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 5 and all("train_gn_compensator.py" in x for x in lines[:4])
+    assert "average_compensator.py" in lines[4] and lines[4].endswith("of stages 3-4>")
+    assert f"--export {tmp_path / 'gnwt_CompensatorGains-v0_s1.npz'}" in lines[4] and "--features hsfo" in lines[4]
