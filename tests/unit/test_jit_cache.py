@@ -41,34 +41,49 @@ def test_the_installed_package_has_a_current_stamp():
 
 _DIGEST_RUN = """
 import hashlib, numpy as np, towenv
+from towenv.core import body_dynamics, houbolt
 sim = towenv.make_simulator("two_part_coastal_ss4", dt=0.05)
 sim.advance_steps(200)
 h = hashlib.sha1()
 for a in (sim.positions, sim.velocities, sim.tensions):
     h.update(np.ascontiguousarray(a).tobytes())
+towenv.Simulator("two_part_tow_1").advance(0.5)
+towenv.Simulator("series_multitow").advance(0.5)
+for fn in (houbolt.iterate_coefficients, houbolt.node_local_solve, body_dynamics.aft_rotational_stiffness):
+    print(fn.__name__, len(fn.signatures))
 print(h.hexdigest())
 """
 
+PHASES = ("iterate_coefficients", "node_local_solve", "aft_rotational_stiffness")
 
-@pytest.mark.slow
-def test_a_compiling_run_and_a_cached_run_give_the_same_bits(tmp_path):
+
+def test_a_compiling_run_and_a_cached_run_give_the_same_bits_and_compile_each_phase_once(tmp_path):
     """Determinism across processes: a run that compiles the kernels (empty numba cache) and a run that loads
     them from the cache give the same trajectory bit for bit. With fast-math (reassociation) this failed once
     the Houbolt step was split into phase functions: numba links a callee's code into each caller and
-    re-optimises it there, and which copy a call reached depended on compile-versus-load (jit.py)."""
+    re-optimises it there, and which copy a call reached depended on compile-versus-load (jit.py).
+
+    The compiling run also checks issue 15's first use: flags computed at run time, not literal ``True``/``False``,
+    so numba compiles each phase of the Houbolt step once — a sea scene, a two-part tow and a series tow (aft tow
+    point, both couplings' code paths) leave one signature each (a literal-typed flag used to add a second
+    compilation of ~3–8 s). The cached run loads the callers compiled and never compiles a phase (0 signatures:
+    the cache served them). One test for both because each compiling run costs over a minute of CPU."""
     import os
     import subprocess
     import sys
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"} | {"NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     runs = []
     for _ in range(2):
         p = subprocess.run([sys.executable, "-P", "-c", _DIGEST_RUN], env=env, capture_output=True, text=True,
                            timeout=900)
         assert p.returncode == 0, p.stderr[-2000:]
-        runs.append(p.stdout.strip().splitlines()[-1])
+        lines = p.stdout.strip().splitlines()
+        runs.append((lines[-1], dict(line.split() for line in lines[-4:-1])))
         if len(runs) == 1:                       # the first run compiled and wrote the cache
             assert list((tmp_path / "cache").rglob("*.nbi")), "the first run wrote no numba cache"
-    assert runs[0] == runs[1]
+    assert runs[0][0] == runs[1][0]
+    assert runs[0][1] == dict.fromkeys(PHASES, "1"), runs[0][1]
+    assert runs[1][1] == dict.fromkeys(PHASES, "0"), runs[1][1]
     assert jit.FASTMATH is False
 
 

@@ -212,28 +212,3 @@ def test_warm_up_compiles_before_the_clock_without_advancing():
     assert a.meta["real_time_factor"] > 0
 
 
-_PHASE_SIGNATURES = """
-import towenv
-from towenv.core import body_dynamics, houbolt
-towenv.Simulator("two_part_tow_1").advance(0.5)
-towenv.Simulator("series_multitow").advance(0.5)
-for fn in (houbolt.iterate_coefficients, houbolt.node_local_solve, body_dynamics.aft_rotational_stiffness):
-    print(fn.__name__, len(fn.signatures))
-"""
-
-
-def test_step_phases_compile_once_per_process(tmp_path):
-    """Issue 15 (first use): flags computed at run time, not literal ``True``/``False``, so numba compiles each
-    phase of the Houbolt step once: a two-part tow and a series tow (aft tow point, both couplings' code paths)
-    leave one signature each (a literal-typed flag used to add a second compilation of ~3–8 s). In a fresh process
-    with an empty numba cache: with a warm cache the callers load compiled and never compile the phases (0
-    signatures, which says nothing)."""
-    import os
-    import subprocess
-    import sys
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"} | {"NUMBA_CACHE_DIR": str(tmp_path / "cache")}
-    p = subprocess.run([sys.executable, "-P", "-c", _PHASE_SIGNATURES], env=env, capture_output=True, text=True,
-                       timeout=900)
-    assert p.returncode == 0, p.stderr[-2000:]
-    counts = dict(line.split() for line in p.stdout.strip().splitlines()[-3:])
-    assert counts == {"iterate_coefficients": "1", "node_local_solve": "1", "aft_rotational_stiffness": "1"}, counts

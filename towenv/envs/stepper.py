@@ -44,7 +44,7 @@ from numba.typed import List as _TypedList
 
 from ..core import kernels as K
 from ..core.model import NO_RECORDING
-from ..core.jit import njit
+from ..core.jit import njit, njit_internal
 from ..core.tow_point import BLOCK, TowPointBuffer, _phase_recurrence  # noqa: F401  (re-exported)
 from .measurements import MEAS_COLUMNS, NREF, R_HALF_STROKE, R_MAXSTEPS, R_STEPS, R_TREF, R_VMAX, gather_arrays, \
     measure_copy
@@ -95,6 +95,28 @@ def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count
         measure_copy(g, ref, dt, (step_count + n) * dt, out, w3a, w3b, w3c, blk, mblk, off + n - 1, n)
 
 
+@njit_internal
+def _copy_physics(item, comp, winch, n, dt, tops, t0, kind, u0, u1, res):
+    """A copy's command and ``n`` physics steps, without its measurement row: what the ``parallel=True`` loop calls
+    per copy. A compiled function of its own (without reference counting: nothing here allocates) rather than
+    :func:`_copy_step` inlined — numba generates again the machine code of everything a kernel inlines or links
+    into it, and inside a ``prange`` region that cost ~250 s of CPU at the first ``parallel=True`` step on the
+    ``znver3`` host against ~60 s this way (docs/environments.md "Threads"). Returns the status."""
+    if kind == ACT_COMP_GAINS:
+        comp[K.C_K] = u0
+        comp[K.C_B] = u1
+    elif kind == ACT_COMP_COMMAND:
+        comp[K.C_CMD] = u0
+    elif kind == ACT_WINCH_SPEED:
+        winch[K.W_VCMD] = u0
+    st, k, el, md = K.advance(n, dt, tops, *item[0], t0, item[1], item[2])
+    res[0] = st
+    res[1] = k
+    res[2] = el
+    res[3] = md
+    return st
+
+
 def _entry_point(kern, args, items, gathers):
     """``(kern, items, gathers, compiled entry point)`` of the overload of ``kern`` that ``args`` select, or None.
 
@@ -139,6 +161,39 @@ def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, mblk, base, end,
     return nbad
 
 
+def _step_batch_parallel_py(items, gathers, nsteps, count_step, dt, blk, mblk, base, end, count, kind, U, refs, res,
+                            M):
+    """:func:`_step_batch_py` with the copies on numba's threads (``prange``; compiled with ``parallel=True``): each
+    copy's physics through :func:`_copy_physics`, then its measurement row — the same operations in the same order
+    as the serial loop's, so the same bits (tested)."""
+    B = len(items)
+    nbad = 0
+    for b in prange(B):
+        n = nsteps[b]
+        if n < 0:
+            continue
+        first = count[b] + 1
+        off = first - base[b]
+        if off < 0 or first + n > end[b]:
+            res[b, 0] = NEED_TOPS
+            nbad += 1
+            continue
+        if count_step:
+            refs[b, R_STEPS] += 1.0
+        g = gathers[np.int64(b)]
+        st = _copy_physics(items[np.int64(b)], g.comp, g.winch, n, dt, blk[b][off:off + n], count[b] * dt, kind,
+                           U[b, 0], U[b, 1], res[b])
+        if st == K.OK:
+            w3a = np.empty(3)
+            w3b = np.empty(3)
+            w3c = np.empty(3)
+            measure_copy(g, refs[b], dt, (count[b] + n) * dt, M[b], w3a, w3b, w3c, blk[b], mblk[b], off + n - 1, n)
+            count[b] += n
+        else:
+            nbad += 1
+    return nbad
+
+
 # typed-List construction and item replacement as cached compiled functions: numba.typed.List's own
 # Python-level append/setitem compile (~1.5 s per process for these large tuple types, not cached)
 @_numba_njit(cache=True)
@@ -158,20 +213,11 @@ def _list_set(lst, i, item):
     lst[i] = item
 
 
-def _renamed(fn, name):
-    """A copy of ``fn`` under another name: numba's on-disk cache is keyed by the function's qualified name
-    and source line, so compiling the SAME function object serially and with ``parallel=True`` made the two
-    dispatchers share one cache entry — the "parallel" kernel then loaded the serial code (measured: one CPU
-    busy, no speed-up)."""
-    import types
-    g = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
-    g.__qualname__ = name
-    g.__doc__ = fn.__doc__
-    return g
-
-
 _step_batch = njit(cache=True)(_step_batch_py)
-_step_batch_parallel = njit(cache=True, parallel=True)(_renamed(_step_batch_py, "_step_batch_py_parallel"))
+#: (a function of its own: numba's disk cache is keyed by the function's qualified name and source line, so the same
+#: function compiled serially and with ``parallel=True`` once shared one cache entry — the "parallel" kernel then
+#: loaded the serial code)
+_step_batch_parallel = njit(cache=True, parallel=True)(_step_batch_parallel_py)
 
 
 # ----------------------------------------------------------------------------------------------------
