@@ -70,12 +70,9 @@ def _signature(kd, sim):
 
 
 @njit(cache=True, inline="always")
-def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count, out, res):
-    """One copy's control step: its command, ``n`` physics steps, its measurement row. Inlined into the batch
-    loop by numba (``inline="always"``): as a compiled function of its own it was one more level that links and
-    generates again the machine code of the whole step below it (towenv.core.jit.njit_internal)."""
-    comp = g.comp
-    winch = g.winch
+def _write_command(comp, winch, kind, u0, u1):
+    """A copy's actuator command of this control step into its parameter arrays: compensator gains k, b, the
+    compensator's command, or the winch's payout speed (``kind``; ``ACT_NONE`` writes nothing)."""
     if kind == ACT_COMP_GAINS:
         comp[K.C_K] = u0
         comp[K.C_B] = u1
@@ -83,6 +80,14 @@ def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count
         comp[K.C_CMD] = u0
     elif kind == ACT_WINCH_SPEED:
         winch[K.W_VCMD] = u0
+
+
+@njit(cache=True, inline="always")
+def _copy_step(item, g, n, dt, blk, mblk, off, t0, kind, u0, u1, ref, step_count, out, res):
+    """One copy's control step: its command, ``n`` physics steps, its measurement row. Inlined into the batch
+    loop by numba (``inline="always"``): as a compiled function of its own it was one more level that links and
+    generates again the machine code of the whole step below it (towenv.core.jit.njit_internal)."""
+    _write_command(g.comp, g.winch, kind, u0, u1)
     st, k, el, md = K.advance(n, dt, blk[off:off + n], *item[0], t0, item[1], item[2])
     res[0] = st
     res[1] = k
@@ -100,15 +105,10 @@ def _copy_physics(item, comp, winch, n, dt, tops, t0, kind, u0, u1, res):
     """A copy's command and ``n`` physics steps, without its measurement row: what the ``parallel=True`` loop calls
     per copy. A compiled function of its own (without reference counting: nothing here allocates) rather than
     :func:`_copy_step` inlined — numba generates again the machine code of everything a kernel inlines or links
-    into it, and inside a ``prange`` region that cost ~250 s of CPU at the first ``parallel=True`` step on the
-    ``znver3`` host against ~60 s this way (docs/environments.md "Threads"). Returns the status."""
-    if kind == ACT_COMP_GAINS:
-        comp[K.C_K] = u0
-        comp[K.C_B] = u1
-    elif kind == ACT_COMP_COMMAND:
-        comp[K.C_CMD] = u0
-    elif kind == ACT_WINCH_SPEED:
-        winch[K.W_VCMD] = u0
+    into it, and inside a ``prange`` region that cost 170–250 s of CPU at the first ``parallel=True`` step on the
+    ``znver3`` host against ~60 s this way (docs/environments.md "The parallel kernel's first compile"). Returns
+    the status."""
+    _write_command(comp, winch, kind, u0, u1)
     st, k, el, md = K.advance(n, dt, tops, *item[0], t0, item[1], item[2])
     res[0] = st
     res[1] = k
@@ -134,6 +134,28 @@ def _entry_point(kern, args, items, gathers):
     return kern, items, gathers, cres.entry_point
 
 
+#: :func:`_copy_offset`'s answers for a copy that does not step: inactive, or its tow-point buffer does not cover the steps
+INACTIVE, NO_TOPS = -1, -2
+
+
+@njit(cache=True, inline="always")
+def _copy_offset(b, nsteps, count_step, base, end, count, refs, res):
+    """Where copy b's control step starts in its tow-point buffer (row ``off`` ≥ 0; its control-step count advanced
+    when ``count_step``), or ``INACTIVE`` (``nsteps[b] < 0``), or ``NO_TOPS`` (the buffer does not cover the steps:
+    ``res[b, 0] = NEED_TOPS``, nothing done — the caller counts the copy as not OK)."""
+    n = nsteps[b]
+    if n < 0:
+        return INACTIVE
+    first = count[b] + 1
+    off = first - base[b]
+    if off < 0 or first + n > end[b]:
+        res[b, 0] = NEED_TOPS
+        return NO_TOPS
+    if count_step:
+        refs[b, R_STEPS] += 1.0
+    return off
+
+
 def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, mblk, base, end, count, kind, U, refs, res, M):
     """Advance every copy b with ``nsteps[b] >= 0`` by that many steps from step ``count[b]`` (tow points
     from ``blk[b]``, whose first row is step ``base[b]``, valid up to step ``end[b]`` excluded); returns the
@@ -141,17 +163,12 @@ def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, mblk, base, end,
     B = len(items)
     nbad = 0
     for b in prange(B):
+        off = _copy_offset(b, nsteps, count_step, base, end, count, refs, res)
+        if off < 0:
+            if off == NO_TOPS:
+                nbad += 1
+            continue
         n = nsteps[b]
-        if n < 0:
-            continue
-        first = count[b] + 1
-        off = first - base[b]
-        if off < 0 or first + n > end[b]:
-            res[b, 0] = NEED_TOPS
-            nbad += 1
-            continue
-        if count_step:
-            refs[b, R_STEPS] += 1.0
         _copy_step(items[np.int64(b)], gathers[np.int64(b)], n, dt, blk[b], mblk[b], off, count[b] * dt, kind,
                    U[b, 0], U[b, 1], refs[b], count[b], M[b], res[b])
         if res[b, 0] == K.OK:
@@ -169,17 +186,12 @@ def _step_batch_parallel_py(items, gathers, nsteps, count_step, dt, blk, mblk, b
     B = len(items)
     nbad = 0
     for b in prange(B):
+        off = _copy_offset(b, nsteps, count_step, base, end, count, refs, res)
+        if off < 0:
+            if off == NO_TOPS:
+                nbad += 1
+            continue
         n = nsteps[b]
-        if n < 0:
-            continue
-        first = count[b] + 1
-        off = first - base[b]
-        if off < 0 or first + n > end[b]:
-            res[b, 0] = NEED_TOPS
-            nbad += 1
-            continue
-        if count_step:
-            refs[b, R_STEPS] += 1.0
         g = gathers[np.int64(b)]
         st = _copy_physics(items[np.int64(b)], g.comp, g.winch, n, dt, blk[b][off:off + n], count[b] * dt, kind,
                            U[b, 0], U[b, 1], res[b])
