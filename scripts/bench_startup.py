@@ -6,7 +6,11 @@
   Python, plots included) with an empty numba cache (a fresh
   ``NUMBA_CACHE_DIR``), CPU time of the whole command (user + system of the child) — what a user pays once
   after installing — and the same command again with that cache filled; their difference is the compilation;
-* the real-time factor the run's summary reports (it starts after compilation).
+* the real-time factor the run's summary reports (it starts after compilation);
+* with ``--env``, the batched environment's first use instead of command 1: ``gym.make_vec`` of WinchPayout-v0
+  (2 copies), reset and one control step, in fresh processes sharing one empty numba cache — serial (the whole
+  first use of an environment), then with ``parallel=True`` (what the parallel batch kernel adds), then serial again
+  (cached); CPU of each process.
 
 ``--numba-opt N`` sets NUMBA_OPT for both runs (numba's LLVM optimisation level, default 3): with 0 it shows
 how much of the compile time is optimisation, and what the run would lose (the cached run's RTF).
@@ -14,6 +18,7 @@ how much of the compile time is optimisation, and what the run would lose (the c
     python scripts/bench_startup.py                    # ~1 minute
     PYTHONPATH=../old python scripts/bench_startup.py  # the same for another checkout (run both at once: paired)
     python scripts/bench_startup.py --numba-opt 0
+    python scripts/bench_startup.py --env              # ~3 minutes
 """
 from __future__ import annotations
 
@@ -51,14 +56,50 @@ def _find(d, key):
     return None
 
 
+#: the environment's first use (``--env``): argv[1] "serial" or "parallel"
+ENV_RUN = """
+import sys
+import numpy as np, gymnasium as gym, towenv.envs
+v = gym.make_vec("towenv/WinchPayout-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                 parallel=sys.argv[1] == "parallel")
+v.reset(seed=0)
+v.step(np.zeros((2, 1), np.float32))
+print("stepped")
+"""
+
+
+def env_first_use(env) -> dict:
+    """CPU seconds of the environment's first use in fresh processes sharing ``env``'s (empty) numba cache:
+    serial, then parallel, then serial cached (see the module docstring)."""
+    out = {}
+    for label, mode in (("serial, empty cache", "serial"), ("parallel=True after it", "parallel"),
+                        ("serial, cached", "serial")):
+        cpu, wall, p = _child_cpu([sys.executable, "-P", "-c", ENV_RUN, mode], env)
+        if p.returncode != 0 or "stepped" not in p.stdout:
+            sys.exit(f"bench_startup: the environment run ({label}) failed:\n{p.stderr[-2000:]}")
+        out[label] = cpu
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--imports", type=int, default=7, help="import-time samples (default 7)")
     ap.add_argument("--numba-opt", type=int, choices=(0, 1, 2, 3), default=None)
+    ap.add_argument("--env", action="store_true", help="time the batched environment's first use (serial and "
+                                                       "parallel=True) instead of README command 1")
     a = ap.parse_args(argv)
     env = dict(os.environ)
     if a.numba_opt is not None:
         env["NUMBA_OPT"] = str(a.numba_opt)
+    if a.env:
+        with tempfile.TemporaryDirectory() as tmp:
+            env["NUMBA_CACHE_DIR"] = str(Path(tmp) / "numba")
+            t = env_first_use(env)
+        print("# the batched environment's first use (make_vec WinchPayout-v0 x2, reset, one step), CPU per process:")
+        for label, cpu in t.items():
+            print(f"  {label:24s} {cpu:6.1f} s")
+        print(f"  the parallel kernel's compile: {t['parallel=True after it'] - t['serial, cached']:.1f} s CPU")
+        return
     imports = [_child_cpu([sys.executable, "-P", "-c", "import towenv"], env)[1] for _ in range(a.imports)]
     with tempfile.TemporaryDirectory() as tmp:
         env["NUMBA_CACHE_DIR"] = str(Path(tmp) / "numba")

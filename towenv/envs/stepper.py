@@ -106,7 +106,7 @@ def _copy_physics(item, comp, winch, n, dt, tops, t0, kind, u0, u1, res):
     per copy. A compiled function of its own (without reference counting: nothing here allocates) rather than
     :func:`_copy_step` inlined — numba generates again the machine code of everything a kernel inlines or links
     into it, and inside a ``prange`` region that cost 170–250 s of CPU at the first ``parallel=True`` step on the
-    ``znver3`` host against ~60 s this way (docs/environments.md "The parallel kernel's first compile"). Returns
+    ``znver3`` host against 60–85 s this way (docs/environments.md "The parallel kernel's first compile"). Returns
     the status."""
     _write_command(comp, winch, kind, u0, u1)
     st, k, el, md = K.advance(n, dt, tops, *item[0], t0, item[1], item[2])
@@ -162,7 +162,7 @@ def _step_batch_py(items, gathers, nsteps, count_step, dt, blk, mblk, base, end,
     number of copies not OK (``NEED_TOPS``: the buffer does not cover the steps — nothing done)."""
     B = len(items)
     nbad = 0
-    for b in prange(B):
+    for b in range(B):
         off = _copy_offset(b, nsteps, count_step, base, end, count, refs, res)
         if off < 0:
             if off == NO_TOPS:
